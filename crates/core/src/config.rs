@@ -1,0 +1,103 @@
+//! Navigator configuration in SI units. File formats (TOML, KF-GINS YAML) are read
+//! by `navfuse-io::config`, which converts user units into these structs.
+
+use crate::outage::OutageSchedule;
+use crate::types::ImuErrors;
+use nalgebra::Vector3;
+
+/// IMU stochastic model (SI units). SYSTEM.md §2: biases and scale factors are
+/// first-order Gauss-Markov processes with correlation time `corr_time_s`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImuNoise {
+    /// Angle random walk [rad/sqrt(s)].
+    pub arw: Vector3<f64>,
+    /// Velocity random walk [m/s/sqrt(s)].
+    pub vrw: Vector3<f64>,
+    /// Gyro bias Gauss-Markov std [rad/s].
+    pub gyro_bias_std: Vector3<f64>,
+    /// Accelerometer bias Gauss-Markov std [m/s²].
+    pub accel_bias_std: Vector3<f64>,
+    /// Gyro scale-factor Gauss-Markov std [-].
+    pub gyro_scale_std: Vector3<f64>,
+    /// Accelerometer scale-factor Gauss-Markov std [-].
+    pub accel_scale_std: Vector3<f64>,
+    /// Correlation time of all twelve Gauss-Markov states [s].
+    pub corr_time_s: f64,
+}
+
+/// Initial state and its uncertainty.
+#[derive(Clone, Debug, PartialEq)]
+pub struct InitialState {
+    /// Latitude [rad], longitude [rad], height [m] of the IMU centre.
+    pub lla: Vector3<f64>,
+    /// NED velocity [m/s].
+    pub v_n: Vector3<f64>,
+    /// Roll, pitch, yaw [rad].
+    pub rpy: Vector3<f64>,
+    /// Initial IMU error estimates.
+    pub imu_errors: ImuErrors,
+    /// 1-sigma of position NED [m], velocity NED [m/s], attitude roll/pitch/yaw [rad].
+    pub pos_std: Vector3<f64>,
+    pub vel_std: Vector3<f64>,
+    pub att_std: Vector3<f64>,
+    /// 1-sigma of the initial IMU errors (SI); KF-GINS defaults them to the noise stds.
+    pub imu_errors_std: ImuErrors,
+}
+
+/// Optional estimation of the GNSS-to-IMU time offset (a filter state).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TimeOffsetConfig {
+    /// Initial value [s]: a GNSS epoch tagged t is applied at IMU time t + offset.
+    pub initial_s: f64,
+    /// Initial 1-sigma [s].
+    pub std_s: f64,
+    /// Random-walk PSD of the offset [s²/s] (0 = constant).
+    pub random_walk: f64,
+}
+
+/// How GNSS fixes are used.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GnssOptions {
+    /// Antenna phase centre in the body frame, from the IMU centre (F, R, D) [m].
+    pub lever_arm_b: Vector3<f64>,
+    /// Use the fix's velocity, when present.
+    pub use_velocity: bool,
+    /// Replace per-epoch position std with this (N, E, D) [m].
+    pub position_std_override: Option<Vector3<f64>>,
+    /// Replace per-epoch velocity std with this (N, E, D) [m/s].
+    pub velocity_std_override: Option<Vector3<f64>>,
+    /// Innovation gate: chi-square tail probability at which a fix is rejected
+    /// (e.g. 1e-4); None = no gating (KF-GINS behaviour).
+    pub gate_probability: Option<f64>,
+    /// Withheld epochs.
+    pub outages: OutageSchedule,
+}
+
+/// Filter options.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FilterOptions {
+    /// Covariance propagation interval [s]; the transition matrix is built from the
+    /// mean specific force and rate over the interval. 0 = every IMU sample.
+    pub covariance_period_s: f64,
+    /// Estimate a GNSS-IMU time offset.
+    pub time_offset: Option<TimeOffsetConfig>,
+}
+
+impl Default for FilterOptions {
+    fn default() -> Self {
+        FilterOptions { covariance_period_s: 0.0, time_offset: None }
+    }
+}
+
+/// Everything the navigator needs besides the data.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NavConfig {
+    pub imu_noise: ImuNoise,
+    pub initial: InitialState,
+    pub gnss: GnssOptions,
+    pub filter: FilterOptions,
+    /// Start time [s]; IMU data before it are skipped.
+    pub start_time: f64,
+    /// End time [s]; None = to the end of the data.
+    pub end_time: Option<f64>,
+}

@@ -1,0 +1,141 @@
+//! What to read and how: the input and output descriptions shared by the config
+//! loader (`config.rs`) and the readers. Plain data, documented in docs/FORMATS.md.
+
+use std::path::PathBuf;
+
+/// What the IMU columns hold.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImuQuantity {
+    /// Angular rate and specific force; converted to increments over each interval.
+    Rate,
+    /// Angle and velocity increments over (t_{k-1}, t_k].
+    Increment,
+}
+
+/// How a rate sample relates to its time tag.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RateSampling {
+    /// Instantaneous value at t_k: increment = (w_{k-1} + w_k) / 2 * dt (trapezoid).
+    Instant,
+    /// Mean over (t_{k-1}, t_k] (already integrated by the sensor): increment = w_k * dt.
+    IntervalMean,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TimeUnit {
+    Seconds,
+    Milliseconds,
+    Microseconds,
+    Nanoseconds,
+}
+
+/// Which clock the time column counts in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TimeScale {
+    /// GPS seconds of week (as KF-GINS).
+    GpsSecondsOfWeek,
+    /// GPS time counted from the Unix epoch with no leap seconds (RTKLIB tag files).
+    GpstUnix,
+}
+
+/// Gyro column unit: rates (rad/s, deg/s) or increments (rad, deg).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GyroUnit {
+    Rad,
+    Deg,
+}
+
+/// Accelerometer column unit (per second for rates; m/s or g*s for increments).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AccelUnit {
+    /// m/s² (rates) or m/s (increments).
+    Metre,
+    /// Standard gravity 9.80665 m/s² (rates) or g*s (increments).
+    G,
+}
+
+/// Generic CSV/whitespace IMU file (docs/FORMATS.md "CSV IMU").
+#[derive(Clone, Debug, PartialEq)]
+pub struct CsvImuOptions {
+    /// Lines to skip at the top (headers).
+    pub skip_lines: usize,
+    /// 0-based column of the time tag.
+    pub time_col: usize,
+    /// 0-based columns of gyro x, y, z (sensor frame).
+    pub gyro_cols: [usize; 3],
+    /// 0-based columns of accelerometer x, y, z (sensor frame).
+    pub accel_cols: [usize; 3],
+    pub time_unit: TimeUnit,
+    pub time_scale: TimeScale,
+    pub quantity: ImuQuantity,
+    pub rate_sampling: RateSampling,
+    pub gyro_unit: GyroUnit,
+    pub accel_unit: AccelUnit,
+}
+
+/// The rtklibexplorer GNSS_IMU raw IMU log: CSV `ax,ay,az [g], gx,gy,gz [deg/s],
+/// counter [ms]` plus an RTKLIB TIMETAG file giving GPST of the log start.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RtklibExplorerImuOptions {
+    /// The `.tag` file beside the CSV.
+    pub tag_path: PathBuf,
+}
+
+/// Where the IMU data come from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ImuFormat {
+    /// KF-GINS text: t, dtheta xyz [rad], dvel xyz [m/s]; 7 columns or more.
+    KfGins,
+    Csv(CsvImuOptions),
+    RtklibExplorer(RtklibExplorerImuOptions),
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImuSource {
+    pub path: PathBuf,
+    pub format: ImuFormat,
+    /// Nominal sample rate [Hz]; used for the first interval and after gaps.
+    pub rate_hz: f64,
+    /// Sensor-to-body rotation, ZYX Euler (roll, pitch, yaw) [deg]:
+    /// v_body = Rz(yaw) Ry(pitch) Rx(roll) v_sensor. Zero for KF-GINS files.
+    pub sensor_to_body_rpy_deg: [f64; 3],
+    /// Seconds added to every IMU time tag (latency correction).
+    pub time_offset_s: f64,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum GnssFormat {
+    /// KF-GINS: t, lat, lon [deg], h [m], std N E D [m] (7 columns); 13 columns add
+    /// vel N E D [m/s] and its std.
+    KfGins,
+    /// RTKLIB solution (.pos), lat/lon/height form, optional velocity columns.
+    RtklibPos {
+        /// Solution quality flags Q to keep (1 = fix, 2 = float, 5 = single ...).
+        quality: Vec<u8>,
+    },
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct GnssSource {
+    pub path: PathBuf,
+    pub format: GnssFormat,
+    /// Keep only epochs within 1 ms of a multiple of this interval [s] (e.g. 1.0 to
+    /// turn 4 Hz into 1 Hz); None keeps all.
+    pub decimate_s: Option<f64>,
+    /// Seconds added to every GNSS time tag.
+    pub time_offset_s: f64,
+}
+
+/// What to write and how often.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OutputSpec {
+    /// Output rate [Hz]; None = every IMU epoch (KF-GINS behaviour).
+    pub rate_hz: Option<f64>,
+    /// `solution.nav` (KF-GINS 11 columns) is always written.
+    /// `imu_err.txt` (KF-GINS IMU_ERR, 13 columns).
+    pub imu_err: bool,
+    /// `std.txt` (KF-GINS STD, 22 columns).
+    pub std: bool,
+    /// `solution.csv` with a header row.
+    pub csv: bool,
+}

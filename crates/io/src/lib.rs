@@ -1,0 +1,14 @@
+//! navfuse-io: file formats and configuration. Every reader reports bad input as an
+//! [`InputError`] naming the file, line and field; none panics.
+
+pub mod config;
+pub mod error;
+pub mod fmt;
+pub mod gnss;
+pub mod imu;
+pub mod input;
+pub mod nav;
+pub mod timetag;
+pub mod time;
+
+pub use error::InputError;
