@@ -1,1 +1,127 @@
-fn main(){}
+//! `navfuse`: the command line. Subcommands live in their own files:
+//! `run_cmd` (the navigator over files), `eval_cmd` (scoring), `bench_cmd` (speed).
+
+mod bench_cmd;
+mod eval_cmd;
+mod run_cmd;
+
+use clap::{Parser, Subcommand};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(
+    name = "navfuse",
+    version,
+    about = "GNSS/INS integrated navigation: strapdown INS + error-state EKF with GNSS aiding",
+    long_about = "GNSS/INS integrated navigation: strapdown INS (NED, WGS-84, coning/sculling) with a \
+closed-loop error-state EKF (21 states) and loosely coupled GNSS position/velocity aiding.\n\n\
+Inputs: KF-GINS text files, CSV IMU logs, the rtklibexplorer raw IMU log, RTKLIB .pos solutions. \
+Outputs: KF-GINS .nav / IMU_ERR / STD files and CSV. Formats: docs/FORMATS.md; configuration keys: docs/CONFIG.md."
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run the navigator on a configuration (navfuse TOML, or a KF-GINS YAML with --kf-gins).
+    ///
+    /// Writes DIR/solution.nav (KF-GINS 11 columns), and as configured DIR/imu_err.txt,
+    /// DIR/std.txt, DIR/solution.csv; DIR/events.log lists rejected GNSS fixes and input
+    /// problems. A progress bar is drawn on stderr when it is a terminal.
+    Run {
+        /// navfuse TOML configuration (docs/CONFIG.md); a .yaml file is read as KF-GINS.
+        #[arg(required_unless_present = "kf_gins", conflicts_with = "kf_gins")]
+        config: Option<PathBuf>,
+        /// An unchanged KF-GINS YAML configuration.
+        #[arg(long = "kf-gins", value_name = "FILE.yaml")]
+        kf_gins: Option<PathBuf>,
+        /// Output directory (created if missing). Default: the config's outputpath
+        /// (KF-GINS) or ./out.
+        #[arg(long, value_name = "DIR")]
+        out: Option<PathBuf>,
+        /// Extra GNSS outages, added to the configured ones: comma-separated `a:b`
+        /// windows (seconds) and `L/P@T[..U]` (L s every P s from T, starting before U).
+        #[arg(long, value_name = "SPEC")]
+        outages: Option<String>,
+        /// No progress bar and no summary line.
+        #[arg(long, short)]
+        quiet: bool,
+    },
+    /// Score a solution against a reference trajectory.
+    ///
+    /// SOLUTION is a KF-GINS .nav file; TRUTH is a .nav file (IMU-centre state with
+    /// attitude) or an RTKLIB .pos file (antenna positions; use --lever-arm to move the
+    /// solution to the antenna). Prints RMS and max of N/E/D, horizontal, vertical and 3D
+    /// position, velocity and roll/pitch/yaw errors; with --gaps also each outage's
+    /// maximum error and the RMS of those maxima.
+    Eval {
+        solution: PathBuf,
+        truth: PathBuf,
+        /// Outage windows: comma-separated `a:b` and `L/P@T[..U]` (see `run --outages`).
+        #[arg(long, value_name = "SPEC")]
+        gaps: Option<String>,
+        /// Body-frame point [m] (F,R,D) to move the solution to before comparing, e.g.
+        /// the antenna lever arm when TRUTH is an antenna track.
+        #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+        lever_arm: Option<String>,
+        /// For an RTKLIB .pos truth: solution qualities to score against (default 1 = fix).
+        #[arg(long, value_name = "Q,...", default_value = "1")]
+        quality: String,
+        /// Only score reference epochs in [start, end] (seconds, same time base).
+        #[arg(long, value_name = "START:END")]
+        window: Option<String>,
+        /// Machine-readable output.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Measure speed and memory: the core filter loop without I/O (samples/s) and a full
+    /// run writing KF-GINS's three output files (wall time, peak memory).
+    Bench {
+        /// KF-GINS YAML for the full run (default: ../shared/data/kf-gins/synthetic/kf-gins.yaml).
+        #[arg(long, value_name = "FILE.yaml")]
+        kf_gins: Option<PathBuf>,
+        /// Repetitions of each measurement (the best is reported).
+        #[arg(long, default_value_t = 3)]
+        repeat: usize,
+        /// Machine-readable output.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Run {
+            config,
+            kf_gins,
+            out,
+            outages,
+            quiet,
+        } => run_cmd::main(config, kf_gins, out, outages, quiet),
+        Command::Eval {
+            solution,
+            truth,
+            gaps,
+            lever_arm,
+            quality,
+            window,
+            json,
+        } => eval_cmd::main(&solution, &truth, gaps, lever_arm, &quality, window, json),
+        Command::Bench {
+            kf_gins,
+            repeat,
+            json,
+        } => bench_cmd::main(kf_gins, repeat, json),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("navfuse: error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

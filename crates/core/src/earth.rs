@@ -31,13 +31,19 @@ pub fn radii(lat_rad: f64) -> (f64, f64) {
 /// SYSTEM.md §1; seed 000 eq. 9-10 (a1 with the standard value 9.7803267715).
 #[inline]
 pub fn gravity_normal(lat_rad: f64, h_m: f64) -> f64 {
+    gravity_normal_sc(lat_rad.sin(), h_m)
+}
+
+/// [`gravity_normal`] from sin(latitude), for callers that already have it.
+#[inline]
+pub fn gravity_normal_sc(sin_lat: f64, h_m: f64) -> f64 {
     const A1: f64 = 9.780_326_771_5;
     const A2: f64 = 0.005_279_041_4;
     const A3: f64 = 0.000_023_271_8;
     const A4: f64 = -0.000_003_087_691_089_1;
     const A5: f64 = 0.000_000_004_397_731_1;
     const A6: f64 = 0.000_000_000_000_721_1;
-    let s2 = lat_rad.sin().powi(2);
+    let s2 = sin_lat * sin_lat;
     A1 * (1.0 + A2 * s2 + A3 * s2 * s2) + (A4 + A5 * s2) * h_m + A6 * h_m * h_m
 }
 
@@ -134,9 +140,15 @@ pub fn c_ne(lat_rad: f64, lon_rad: f64) -> Matrix3<f64> {
     let (sl, cl) = lat_rad.sin_cos();
     let (so, co) = lon_rad.sin_cos();
     Matrix3::new(
-        -sl * co, -so, -cl * co, //
-        -sl * so, co, -cl * so, //
-        cl, 0.0, -sl,
+        -sl * co,
+        -so,
+        -cl * co, //
+        -sl * so,
+        co,
+        -cl * so, //
+        cl,
+        0.0,
+        -sl,
     )
 }
 

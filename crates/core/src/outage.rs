@@ -62,7 +62,10 @@ impl OutageSchedule {
                     break;
                 }
                 if start + p.length > t0 {
-                    out.push(Window { start, end: start + p.length });
+                    out.push(Window {
+                        start,
+                        end: start + p.length,
+                    });
                 }
                 k += 1.0;
             }
@@ -99,7 +102,12 @@ impl OutageSchedule {
                 if length <= 0.0 || period <= length {
                     return Err(format!("outage '{item}': need 0 < L < P"));
                 }
-                s.periodic.push(Periodic { length, period, from, until });
+                s.periodic.push(Periodic {
+                    length,
+                    period,
+                    from,
+                    until,
+                });
             } else if let Some((a, b)) = item.split_once(':') {
                 let (start, end) = (num(a)?, num(b)?);
                 if end <= start {

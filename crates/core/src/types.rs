@@ -65,10 +65,10 @@ impl ImuErrors {
     /// Apply the error estimates to a raw sample.
     #[inline]
     pub fn compensate(&self, s: &ImuSample) -> ImuSample {
-        let dtheta = (s.dtheta - self.gyro_bias * s.dt)
-            .component_div(&self.gyro_scale.add_scalar(1.0));
-        let dvel = (s.dvel - self.accel_bias * s.dt)
-            .component_div(&self.accel_scale.add_scalar(1.0));
+        let dtheta =
+            (s.dtheta - self.gyro_bias * s.dt).component_div(&self.gyro_scale.add_scalar(1.0));
+        let dvel =
+            (s.dvel - self.accel_bias * s.dt).component_div(&self.accel_scale.add_scalar(1.0));
         ImuSample { dtheta, dvel, ..*s }
     }
 }

@@ -8,7 +8,7 @@ pub mod gnss;
 pub mod imu;
 pub mod input;
 pub mod nav;
-pub mod timetag;
 pub mod time;
+pub mod timetag;
 
 pub use error::InputError;

@@ -1,1 +1,269 @@
-//! (being written)
+//! GPS time helpers (no leap seconds anywhere: everything here is GPST).
+//!
+//! - GPST calendar date and time -> (GPS week, seconds of week), and back.
+//! - "GPST as Unix seconds" (RTKLIB tag files): seconds since 1970-01-01 00:00:00
+//!   counted in GPS time, so the GPS epoch 1980-01-06 00:00:00 is 315964800.
+
+use std::fmt;
+
+/// The GPS epoch (1980-01-06 00:00:00 GPST) in GPST-as-Unix seconds.
+pub const GPS_EPOCH_UNIX: i64 = 315_964_800;
+/// Seconds in a GPS week.
+pub const SECONDS_PER_WEEK: i64 = 604_800;
+/// Seconds in a GPS week, as f64.
+pub const SECONDS_PER_WEEK_F64: f64 = 604_800.0;
+
+/// Days from 1970-01-01 to the civil date (proleptic Gregorian).
+pub fn days_from_civil(year: i64, month: u32, day: u32) -> i64 {
+    let y = if month <= 2 { year - 1 } else { year };
+    let era = y.div_euclid(400);
+    let yoe = y - era * 400; // [0, 399]
+    let m = month as i64;
+    let mp = if m > 2 { m - 3 } else { m + 9 }; // March = 0
+    let doy = (153 * mp + 2) / 5 + day as i64 - 1; // [0, 365]
+    let doe = yoe * 365 + yoe / 4 - yoe / 100 + doy; // [0, 146096]
+    era * 146_097 + doe - 719_468
+}
+
+/// Civil date (year, month 1-12, day 1-31) of a day count from 1970-01-01.
+pub fn civil_from_days(days: i64) -> (i64, u32, u32) {
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097; // [0, 146096]
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365; // [0, 399]
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100); // [0, 365]
+    let mp = (5 * doy + 2) / 153; // [0, 11]
+    let day = (doy - (153 * mp + 2) / 5 + 1) as u32;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 } as u32;
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    (year, month, day)
+}
+
+/// Number of days in a month (1-12) of a year; 0 for an invalid month.
+pub fn days_in_month(year: i64, month: u32) -> u32 {
+    let leap = (year % 4 == 0 && year % 100 != 0) || year % 400 == 0;
+    match month {
+        1 | 3 | 5 | 7 | 8 | 10 | 12 => 31,
+        4 | 6 | 9 | 11 => 30,
+        2 if leap => 29,
+        2 => 28,
+        _ => 0,
+    }
+}
+
+/// A GPST calendar date and time of day.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Calendar {
+    pub year: i64,
+    pub month: u32,
+    pub day: u32,
+    pub hour: u32,
+    pub minute: u32,
+    /// Seconds, 0 <= second < 60 (values up to 61 are accepted on input and carried).
+    pub second: f64,
+}
+
+impl fmt::Display for Calendar {
+    /// `YYYY/MM/DD HH:MM:SS.sss` (the RTKLIB form; seconds rounded to the
+    /// millisecond, but never up to 60).
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let ms_total = (self.second * 1000.0).round().clamp(0.0, 59_999.0);
+        let s = (ms_total / 1000.0).floor();
+        let ms = ms_total - s * 1000.0;
+        write!(
+            f,
+            "{:04}/{:02}/{:02} {:02}:{:02}:{:02}.{:03}",
+            self.year, self.month, self.day, self.hour, self.minute, s as u32, ms as u32
+        )
+    }
+}
+
+/// GPST calendar -> (GPS week, seconds of week). None if the date or time of day is
+/// invalid, the seconds are not finite, or the time is before the GPS epoch.
+pub fn calendar_to_week_sow(c: &Calendar) -> Option<(u32, f64)> {
+    if !(1..=12).contains(&c.month)
+        || c.day == 0
+        || c.day > days_in_month(c.year, c.month)
+        || c.hour > 23
+        || c.minute > 59
+        || !c.second.is_finite()
+        || !(0.0..61.0).contains(&c.second)
+    {
+        return None;
+    }
+    if !(1900..=9999).contains(&c.year) {
+        return None;
+    }
+    let days = days_from_civil(c.year, c.month, c.day) - days_from_civil(1980, 1, 6);
+    if days < 0 {
+        return None;
+    }
+    let week = days / 7;
+    let sod = i64::from(c.hour) * 3600 + i64::from(c.minute) * 60;
+    let sow = ((days % 7) * 86_400 + sod) as f64 + c.second;
+    u32::try_from(week).ok().map(|w| (w, sow))
+}
+
+/// GPST-as-Unix seconds -> (GPS week, seconds of week). None before the GPS epoch or
+/// for non-finite input.
+pub fn gpst_unix_to_week_sow(unix_s: f64) -> Option<(u32, f64)> {
+    if !unix_s.is_finite() {
+        return None;
+    }
+    let whole = unix_s.floor();
+    if whole.abs() > 1e15 {
+        return None;
+    }
+    gpst_unix_parts_to_week_sow(whole as i64, unix_s - whole)
+}
+
+/// GPST-as-Unix time given as whole seconds plus a fraction (keeps full precision,
+/// as in RTKLIB tag files) -> (GPS week, seconds of week).
+pub fn gpst_unix_parts_to_week_sow(whole_s: i64, frac_s: f64) -> Option<(u32, f64)> {
+    if !frac_s.is_finite() {
+        return None;
+    }
+    let since = whole_s.checked_sub(GPS_EPOCH_UNIX)?;
+    let mut week = since.div_euclid(SECONDS_PER_WEEK);
+    let mut sow = since.rem_euclid(SECONDS_PER_WEEK) as f64 + frac_s;
+    // Carry a fraction outside [0, 1) into the week if needed.
+    if sow >= SECONDS_PER_WEEK_F64 {
+        sow -= SECONDS_PER_WEEK_F64;
+        week += 1;
+    } else if sow < 0.0 {
+        sow += SECONDS_PER_WEEK_F64;
+        week -= 1;
+    }
+    u32::try_from(week).ok().map(|w| (w, sow))
+}
+
+/// (GPS week, seconds of week) -> GPST-as-Unix seconds. `sow` may exceed a week.
+pub fn week_sow_to_gpst_unix(week: u32, sow: f64) -> f64 {
+    (GPS_EPOCH_UNIX + i64::from(week) * SECONDS_PER_WEEK) as f64 + sow
+}
+
+/// (GPS week, seconds of week) -> GPST calendar. `sow` may be negative or exceed a
+/// week (it is normalised); it must be finite (non-finite gives the week start).
+pub fn week_sow_to_calendar(week: u32, sow: f64) -> Calendar {
+    let sow = if sow.is_finite() { sow } else { 0.0 };
+    let whole = sow.floor();
+    let frac = sow - whole;
+    let total = i64::from(week) * SECONDS_PER_WEEK + whole as i64; // since GPS epoch
+    let days = total.div_euclid(86_400);
+    let sod = total.rem_euclid(86_400);
+    let (year, month, day) = civil_from_days(days_from_civil(1980, 1, 6) + days);
+    Calendar {
+        year,
+        month,
+        day,
+        hour: (sod / 3600) as u32,
+        minute: ((sod % 3600) / 60) as u32,
+        second: (sod % 60) as f64 + frac,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cal(y: i64, mo: u32, d: u32, h: u32, mi: u32, s: f64) -> Calendar {
+        Calendar {
+            year: y,
+            month: mo,
+            day: d,
+            hour: h,
+            minute: mi,
+            second: s,
+        }
+    }
+
+    #[test]
+    fn gps_epoch() {
+        assert_eq!(days_from_civil(1970, 1, 1), 0);
+        assert_eq!(days_from_civil(1980, 1, 6) * 86_400, GPS_EPOCH_UNIX);
+        assert_eq!(
+            calendar_to_week_sow(&cal(1980, 1, 6, 0, 0, 0.0)),
+            Some((0, 0.0))
+        );
+        assert_eq!(calendar_to_week_sow(&cal(1980, 1, 5, 23, 59, 59.0)), None);
+        assert_eq!(gpst_unix_to_week_sow(315_964_800.0), Some((0, 0.0)));
+        assert_eq!(gpst_unix_to_week_sow(315_964_799.5), None);
+    }
+
+    #[test]
+    fn known_dates() {
+        // 2025-07-08 is a Tuesday of GPS week 2374 (week 2374 starts Sun 2025-07-06).
+        let (w, sow) = calendar_to_week_sow(&cal(2025, 7, 8, 19, 34, 18.499)).unwrap();
+        assert_eq!(w, 2374);
+        assert!((sow - (2.0 * 86400.0 + 19.0 * 3600.0 + 34.0 * 60.0 + 18.499)).abs() < 1e-9);
+        // Week 1024 rollover day, 1999-08-22.
+        assert_eq!(
+            calendar_to_week_sow(&cal(1999, 8, 22, 0, 0, 0.0)),
+            Some((1024, 0.0))
+        );
+        // Week 2048 rollover, 2019-04-07.
+        assert_eq!(
+            calendar_to_week_sow(&cal(2019, 4, 7, 0, 0, 0.0)),
+            Some((2048, 0.0))
+        );
+        // Leap day.
+        let (w, sow) = calendar_to_week_sow(&cal(2024, 2, 29, 12, 0, 0.0)).unwrap();
+        let back = week_sow_to_calendar(w, sow);
+        assert_eq!(
+            (back.year, back.month, back.day, back.hour),
+            (2024, 2, 29, 12)
+        );
+    }
+
+    #[test]
+    fn invalid_calendar() {
+        assert_eq!(calendar_to_week_sow(&cal(2023, 2, 29, 0, 0, 0.0)), None);
+        assert_eq!(calendar_to_week_sow(&cal(2023, 13, 1, 0, 0, 0.0)), None);
+        assert_eq!(calendar_to_week_sow(&cal(2023, 1, 1, 24, 0, 0.0)), None);
+        assert_eq!(calendar_to_week_sow(&cal(2023, 1, 1, 0, 60, 0.0)), None);
+        assert_eq!(calendar_to_week_sow(&cal(2023, 1, 1, 0, 0, f64::NAN)), None);
+        assert_eq!(calendar_to_week_sow(&cal(2023, 1, 1, 0, 0, -1.0)), None);
+    }
+
+    #[test]
+    fn unix_round_trip() {
+        for &(w, sow) in &[
+            (0u32, 0.0),
+            (2374, 243_258.499),
+            (2379, 604_799.75),
+            (1, 3.0),
+        ] {
+            let u = week_sow_to_gpst_unix(w, sow);
+            let (w2, sow2) = gpst_unix_to_week_sow(u).unwrap();
+            assert_eq!(w2, w);
+            assert!((sow2 - sow).abs() < 1e-6, "{sow} {sow2}");
+        }
+        // Parts keep precision and carry.
+        assert_eq!(
+            gpst_unix_parts_to_week_sow(GPS_EPOCH_UNIX + SECONDS_PER_WEEK - 1, 1.0),
+            Some((1, 0.0))
+        );
+        assert_eq!(
+            gpst_unix_parts_to_week_sow(GPS_EPOCH_UNIX + SECONDS_PER_WEEK, -0.25),
+            Some((0, 604_799.75))
+        );
+    }
+
+    #[test]
+    fn calendar_round_trip_many_days() {
+        let start = days_from_civil(1980, 1, 6);
+        for d in (0..20_000).step_by(7 * 13 + 3) {
+            let (y, m, dd) = civil_from_days(start + d);
+            assert_eq!(days_from_civil(y, m, dd), start + d);
+            let c = cal(y, m, dd, 13, 7, 42.125);
+            let (w, sow) = calendar_to_week_sow(&c).unwrap();
+            assert_eq!(week_sow_to_calendar(w, sow), c);
+        }
+    }
+
+    #[test]
+    fn calendar_display() {
+        let c = week_sow_to_calendar(2374, 2.0 * 86400.0 + 70461.854);
+        assert_eq!(c.to_string(), "2025/07/08 19:34:21.854");
+    }
+}

@@ -1,0 +1,264 @@
+//! `navfuse eval`: score a solution file against a reference file.
+
+use anyhow::{bail, Context, Result};
+use nalgebra::Vector3;
+use navfuse_core::attitude::euler_from_q_bn;
+use navfuse_core::eval::{evaluate, EvalOptions, EvalReport, Stat, TrajPoint};
+use navfuse_core::outage::OutageSchedule;
+use navfuse_io::gnss::read_gnss;
+use navfuse_io::input::{GnssFormat, GnssSource};
+use navfuse_io::nav::read_nav;
+use serde_json::{json, Value};
+use std::path::Path;
+
+const WEEK_S: f64 = 604_800.0;
+
+/// A trajectory with its GPS week (0 = unknown, times are seconds of week).
+struct Track {
+    week: u32,
+    points: Vec<TrajPoint>,
+}
+
+fn load_nav(path: &Path) -> Result<Track> {
+    let rows = read_nav(path).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let week = rows.first().map_or(0, |r| r.0);
+    let points = rows
+        .iter()
+        .map(|(w, s)| TrajPoint {
+            t: s.t + (*w as f64 - week as f64) * WEEK_S,
+            lla: s.lla,
+            v_n: Some(s.v_n),
+            rpy: Some(euler_from_q_bn(&s.q_bn)),
+        })
+        .collect();
+    Ok(Track { week, points })
+}
+
+fn load_pos(path: &Path, quality: Vec<u8>) -> Result<Track> {
+    let src = GnssSource {
+        path: path.to_path_buf(),
+        format: GnssFormat::RtklibPos { quality },
+        decimate_s: None,
+        time_offset_s: 0.0,
+    };
+    let g = read_gnss(&src).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let points = g
+        .fixes
+        .iter()
+        .map(|f| TrajPoint {
+            t: f.t,
+            lla: f.lla,
+            v_n: f.vel_ned,
+            rpy: None,
+        })
+        .collect();
+    Ok(Track {
+        week: g.gps_week.unwrap_or(0),
+        points,
+    })
+}
+
+fn is_pos(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("pos"))
+}
+
+fn parse_vec3(s: &str) -> Result<Vector3<f64>> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .with_context(|| format!("--lever-arm '{s}': expected three numbers X,Y,Z in metres"))?;
+    if v.len() != 3 || v.iter().any(|x| !x.is_finite()) {
+        bail!("--lever-arm '{s}': expected three finite numbers X,Y,Z in metres");
+    }
+    Ok(Vector3::new(v[0], v[1], v[2]))
+}
+
+pub fn main(
+    solution: &Path,
+    truth: &Path,
+    gaps: Option<String>,
+    lever_arm: Option<String>,
+    quality: &str,
+    window: Option<String>,
+    json_out: bool,
+) -> Result<()> {
+    let sol = load_nav(solution)?;
+    let quality: Vec<u8> = quality
+        .split(',')
+        .map(|q| q.trim().parse::<u8>())
+        .collect::<Result<_, _>>()
+        .with_context(|| format!("--quality '{quality}': expected comma-separated integers"))?;
+    let mut reference = if is_pos(truth) {
+        load_pos(truth, quality)?
+    } else {
+        load_nav(truth)?
+    };
+    if sol.points.is_empty() {
+        bail!("{}: no solution epochs", solution.display());
+    }
+    if reference.points.is_empty() {
+        bail!("{}: no reference epochs", truth.display());
+    }
+    // Same week reference for both (a week of 0 means seconds of week only).
+    if sol.week != 0 && reference.week != 0 && sol.week != reference.week {
+        let shift = (reference.week as f64 - sol.week as f64) * WEEK_S;
+        reference.points.iter_mut().for_each(|p| p.t += shift);
+    }
+    if let Some(w) = window {
+        let (a, b) = w
+            .split_once(':')
+            .and_then(|(a, b)| Some((a.trim().parse::<f64>().ok()?, b.trim().parse::<f64>().ok()?)))
+            .with_context(|| format!("--window '{w}': expected START:END in seconds"))?;
+        reference.points.retain(|p| p.t >= a && p.t <= b);
+    }
+    let schedule = match &gaps {
+        Some(g) => OutageSchedule::parse(g).map_err(|e| anyhow::anyhow!("--gaps: {e}"))?,
+        None => OutageSchedule::default(),
+    };
+    let (t0, t1) = (sol.points[0].t, sol.points[sol.points.len() - 1].t);
+    let opts = EvalOptions {
+        gaps: schedule.windows_in(t0, t1),
+        lever_arm_b: lever_arm.as_deref().map(parse_vec3).transpose()?,
+        ..Default::default()
+    };
+    if opts.lever_arm_b.is_some() && sol.points.iter().any(|p| p.rpy.is_none()) {
+        bail!("--lever-arm needs attitude in the solution");
+    }
+    let rep = evaluate(&sol.points, &reference.points, &opts);
+    if rep.epochs == 0 {
+        bail!(
+            "no reference epoch of {} falls inside the solution's time span {:.3} .. {:.3} (check the time tags and weeks)",
+            truth.display(), t0, t1
+        );
+    }
+    if json_out {
+        println!("{}", serde_json::to_string_pretty(&to_json(&rep))?);
+    } else {
+        print!("{}", to_text(&rep));
+    }
+    Ok(())
+}
+
+fn stat_json(s: &Stat, scale: f64) -> Value {
+    json!({ "rms": s.rms * scale, "max": s.max * scale, "mean": s.mean * scale })
+}
+
+pub fn to_json(r: &EvalReport) -> Value {
+    let d = 180.0 / std::f64::consts::PI;
+    let mut v = json!({
+        "epochs": r.epochs,
+        "skipped": r.skipped,
+        "t_first": r.t_first,
+        "t_last": r.t_last,
+        "position_m": {
+            "north": stat_json(&r.north, 1.0),
+            "east": stat_json(&r.east, 1.0),
+            "down": stat_json(&r.down, 1.0),
+            "horizontal": stat_json(&r.horizontal, 1.0),
+            "vertical": stat_json(&r.vertical, 1.0),
+            "3d": stat_json(&r.pos_3d, 1.0),
+        },
+    });
+    if let Some(vel) = &r.vel {
+        v["velocity_mps"] = json!({
+            "north": stat_json(&vel[0], 1.0), "east": stat_json(&vel[1], 1.0),
+            "down": stat_json(&vel[2], 1.0), "3d": stat_json(&vel[3], 1.0),
+        });
+    }
+    if let Some(a) = &r.att {
+        v["attitude_deg"] = json!({
+            "roll": stat_json(&a[0], d), "pitch": stat_json(&a[1], d), "yaw": stat_json(&a[2], d),
+        });
+    }
+    if !r.gaps.is_empty() {
+        v["gaps"] = Value::Array(
+            r.gaps
+                .iter()
+                .map(|g| {
+                    json!({
+                        "start": g.start, "end": g.end, "epochs": g.epochs,
+                        "max_horizontal_m": g.max_horizontal, "max_vertical_m": g.max_vertical,
+                        "max_3d_m": g.max_3d, "max_roll_deg": g.max_roll * d,
+                        "max_pitch_deg": g.max_pitch * d, "max_yaw_deg": g.max_yaw * d,
+                    })
+                })
+                .collect(),
+        );
+    }
+    if let Some(g) = &r.gap_rms {
+        v["gap_max_rms"] = json!({
+            "horizontal_m": g[0], "vertical_m": g[1], "3d_m": g[2],
+            "roll_deg": g[3] * d, "pitch_deg": g[4] * d, "yaw_deg": g[5] * d,
+        });
+    }
+    v
+}
+
+pub fn to_text(r: &EvalReport) -> String {
+    let d = 180.0 / std::f64::consts::PI;
+    let mut s = format!(
+        "epochs scored: {} (skipped {}), t {:.3} .. {:.3}\n{:<22}{:>12}{:>12}{:>12}\n",
+        r.epochs, r.skipped, r.t_first, r.t_last, "error", "rms", "max", "mean"
+    );
+    let mut row = |name: &str, st: &Stat, k: f64| {
+        s.push_str(&format!(
+            "{:<22}{:>12.4}{:>12.4}{:>12.4}\n",
+            name,
+            st.rms * k,
+            st.max * k,
+            st.mean * k
+        ));
+    };
+    row("north [m]", &r.north, 1.0);
+    row("east [m]", &r.east, 1.0);
+    row("down [m]", &r.down, 1.0);
+    row("horizontal [m]", &r.horizontal, 1.0);
+    row("vertical [m]", &r.vertical, 1.0);
+    row("3d [m]", &r.pos_3d, 1.0);
+    if let Some(v) = &r.vel {
+        row("vel north [m/s]", &v[0], 1.0);
+        row("vel east [m/s]", &v[1], 1.0);
+        row("vel down [m/s]", &v[2], 1.0);
+        row("vel 3d [m/s]", &v[3], 1.0);
+    }
+    if let Some(a) = &r.att {
+        row("roll [deg]", &a[0], d);
+        row("pitch [deg]", &a[1], d);
+        row("yaw [deg]", &a[2], d);
+    }
+    if !r.gaps.is_empty() {
+        s.push_str(&format!(
+            "outages: {}\n{:>14}{:>14}{:>8}{:>10}{:>10}{:>10}{:>10}\n",
+            r.gaps.len(),
+            "start",
+            "end",
+            "epochs",
+            "hor [m]",
+            "ver [m]",
+            "3d [m]",
+            "yaw [deg]"
+        ));
+        for g in &r.gaps {
+            s.push_str(&format!(
+                "{:>14.3}{:>14.3}{:>8}{:>10.3}{:>10.3}{:>10.3}{:>10.4}\n",
+                g.start,
+                g.end,
+                g.epochs,
+                g.max_horizontal,
+                g.max_vertical,
+                g.max_3d,
+                g.max_yaw * d
+            ));
+        }
+    }
+    if let Some(g) = &r.gap_rms {
+        s.push_str(&format!(
+            "RMS of per-outage maxima: horizontal {:.4} m, vertical {:.4} m, 3d {:.4} m, roll {:.4} deg, pitch {:.4} deg, yaw {:.4} deg\n",
+            g[0], g[1], g[2], g[3] * d, g[4] * d, g[5] * d
+        ));
+    }
+    s
+}

@@ -1,0 +1,46 @@
+//! Loosely coupled GNSS velocity with the lever-arm rotation term. SYSTEM.md §3a.
+//!
+//!   v_ant = v^n + C_b^n (w_ib^b x l^b) - w_in^n x (C_b^n l^b)
+//!   y = v_ant,INS - v_GNSS ~ dv + ([C (w x l)] x - [w_in x][C l x]) phi
+//!                            - C [l x] (b_g + diag(w) s_g)
+//!   R = diag(vel_std²)
+
+use super::{AidingContext, Linearized};
+use crate::attitude::skew;
+use crate::earth::{omega_en_n, omega_ie_n};
+use crate::state::{ATT, BG, SG, VEL};
+use crate::types::GnssFix;
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+
+/// Antenna velocity in NED predicted from the INS [m/s].
+pub fn antenna_velocity(ctx: &AidingContext) -> Vector3<f64> {
+    let nav = ctx.nav;
+    let c_bn = nav.q_bn.to_rotation_matrix().into_inner();
+    let w_in = omega_ie_n(nav.lla.x) + omega_en_n(nav.lla.x, nav.lla.z, &nav.v_n);
+    nav.v_n + c_bn * ctx.w_ib_b.cross(&ctx.lever_arm_b) - w_in.cross(&(c_bn * ctx.lever_arm_b))
+}
+
+pub fn linearize(ctx: &AidingContext, fix: &GnssFix) -> Option<Linearized> {
+    let v_meas = fix.vel_ned?;
+    let std = fix.vel_std_ned?;
+    let nav = ctx.nav;
+    let n = ctx.layout.len();
+    let c_bn = nav.q_bn.to_rotation_matrix().into_inner();
+    let l = ctx.lever_arm_b;
+    let w_in = omega_ie_n(nav.lla.x) + omega_en_n(nav.lla.x, nav.lla.z, &nav.v_n);
+    let y3 = antenna_velocity(ctx) - v_meas;
+    let mut h = DMatrix::zeros(3, n);
+    h.view_mut((0, VEL), (3, 3)).copy_from(&Matrix3::identity());
+    let h_att = skew(&(c_bn * ctx.w_ib_b.cross(&l))) - skew(&w_in) * skew(&(c_bn * l));
+    h.view_mut((0, ATT), (3, 3)).copy_from(&h_att);
+    let c_lx = -(c_bn * skew(&l));
+    h.view_mut((0, BG), (3, 3)).copy_from(&c_lx);
+    h.view_mut((0, SG), (3, 3))
+        .copy_from(&(c_lx * Matrix3::from_diagonal(&ctx.w_ib_b)));
+    let r = DMatrix::from_diagonal(&DVector::from_iterator(3, std.iter().map(|s| s * s)));
+    Some(Linearized {
+        y: DVector::from_column_slice(y3.as_slice()),
+        h,
+        r,
+    })
+}

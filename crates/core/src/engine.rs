@@ -1,0 +1,477 @@
+//! The navigator: nominal INS state, closed-loop error-state filter and the time
+//! loop that interleaves IMU intervals with aiding measurements.
+//!
+//! Time handling: a GNSS epoch that falls inside an IMU interval splits it (the
+//! increments are shared in proportion to time), so the update happens exactly at
+//! the epoch (SYSTEM.md §1, seed 000 eq. 31-32). The covariance is propagated every
+//! `covariance_period_s` (and always right before an update) with the transition
+//! matrix built from the mean specific force and rate over that span.
+
+use crate::aiding::{Aiding, AidingContext};
+use crate::alignment;
+use crate::attitude::{c_bn_from_euler, euler_from_q_bn, q_bn_from_euler, quat_from_rotvec};
+use crate::config::{AttitudeInit, NavConfig};
+use crate::earth::lla_add_ned;
+use crate::error_model::{fill_f, fill_qc, Discretizer, MeanMotion};
+use crate::filter::{chi2_threshold, Eskf, UpdateOutcome};
+use crate::mechanization::Mechanizer;
+use crate::state::{Block, StateLayout, ATT, BA, BG, N_INS, POS, SA, SG, VEL};
+use crate::types::{GnssFix, ImuErrors, ImuSample, NavState};
+use nalgebra::{DMatrix, DVector, Vector3};
+
+/// Something worth telling the user about, with its time.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Event {
+    /// A measurement failed the innovation gate.
+    Rejected {
+        t: f64,
+        source: &'static str,
+        nis: f64,
+        threshold: f64,
+    },
+    /// A measurement's innovation covariance was singular; dropped.
+    Singular { t: f64, source: &'static str },
+}
+
+impl std::fmt::Display for Event {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Event::Rejected { t, source, nis, threshold } => write!(
+                f,
+                "{t:.3} {source} rejected: normalised innovation squared {nis:.1} > gate {threshold:.1}"
+            ),
+            Event::Singular { t, source } => {
+                write!(f, "{t:.3} {source} dropped: innovation covariance not positive definite")
+            }
+        }
+    }
+}
+
+/// Counts for the end-of-run summary.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RunSummary {
+    pub first_t: f64,
+    pub last_t: f64,
+    pub imu_samples: usize,
+    pub gnss_used: usize,
+    pub gnss_rejected: usize,
+    pub gnss_in_outage: usize,
+    pub gnss_before_start: usize,
+    pub outputs: usize,
+    pub events: Vec<Event>,
+    /// Final GNSS-IMU time-offset estimate and its 1-sigma [s], when estimated.
+    pub time_offset: Option<(f64, f64)>,
+}
+
+#[derive(Clone, Copy, Debug, Default)]
+struct Accum {
+    dt: f64,
+    dv_f_n: Vector3<f64>,
+    dtheta: Vector3<f64>,
+    dvel: Vector3<f64>,
+}
+
+/// Nominal state + error covariance + mechanization history.
+pub struct Navigator {
+    cfg: NavConfig,
+    layout: StateLayout,
+    filter: Eskf,
+    disc: Discretizer,
+    mech: Mechanizer,
+    nav: NavState,
+    imu_errors: ImuErrors,
+    time_offset_s: f64,
+    acc: Accum,
+    w_ib_b: Vector3<f64>,
+    gate3: Option<f64>,
+    summary: RunSummary,
+}
+
+impl Navigator {
+    /// Initialise at time `t0` with position `lla` (IMU centre) and attitude `rpy`
+    /// [rad]; the rest (velocity, IMU errors, uncertainties) from `cfg.initial`.
+    pub fn new(cfg: &NavConfig, t0: f64, lla: Vector3<f64>, rpy: Vector3<f64>) -> Self {
+        let mut layout = StateLayout::ins21();
+        if cfg.filter.time_offset.is_some() {
+            layout.push(Block::TimeOffset);
+        }
+        let n = layout.len();
+        let ini = &cfg.initial;
+        let mut p0 = DVector::zeros(n);
+        let e = &ini.imu_errors_std;
+        for k in 0..3 {
+            p0[POS + k] = ini.pos_std[k].powi(2);
+            p0[VEL + k] = ini.vel_std[k].powi(2);
+            p0[ATT + k] = ini.att_std[k].powi(2);
+            p0[BG + k] = e.gyro_bias[k].powi(2);
+            p0[BA + k] = e.accel_bias[k].powi(2);
+            p0[SG + k] = e.gyro_scale[k].powi(2);
+            p0[SA + k] = e.accel_scale[k].powi(2);
+        }
+        let mut time_offset_s = 0.0;
+        if let (Some(to), Some(i)) = (cfg.filter.time_offset, layout.index(Block::TimeOffset)) {
+            p0[i] = to.std_s.powi(2);
+            time_offset_s = to.initial_s;
+        }
+        let nav = NavState {
+            t: t0,
+            lla,
+            v_n: ini.v_n,
+            q_bn: q_bn_from_euler(&rpy),
+        };
+        let gate3 = cfg.gnss.gate_probability.map(|p| chi2_threshold(3, p));
+        Navigator {
+            cfg: cfg.clone(),
+            filter: Eskf::new(DMatrix::from_diagonal(&p0)),
+            disc: Discretizer::new(n),
+            layout,
+            mech: Mechanizer::new(),
+            nav,
+            imu_errors: ini.imu_errors,
+            time_offset_s,
+            acc: Accum::default(),
+            w_ib_b: Vector3::zeros(),
+            gate3,
+            summary: RunSummary {
+                first_t: t0,
+                last_t: t0,
+                ..Default::default()
+            },
+        }
+    }
+
+    pub fn nav(&self) -> &NavState {
+        &self.nav
+    }
+
+    pub fn imu_errors(&self) -> &ImuErrors {
+        &self.imu_errors
+    }
+
+    pub fn layout(&self) -> &StateLayout {
+        &self.layout
+    }
+
+    pub fn covariance(&self) -> &DMatrix<f64> {
+        &self.filter.p
+    }
+
+    /// Current GNSS-IMU time offset estimate [s] (0 when not estimated).
+    pub fn time_offset(&self) -> f64 {
+        self.time_offset_s
+    }
+
+    /// 1-sigma of the 21 INS states in SI units (pos N E D, vel N E D, att r p y,
+    /// gyro bias, accel bias, gyro scale, accel scale), as of the last covariance
+    /// propagation or update.
+    pub fn std21(&self) -> [f64; N_INS] {
+        let mut s = [0.0; N_INS];
+        for (i, v) in s.iter_mut().enumerate() {
+            *v = self.filter.std(i);
+        }
+        s
+    }
+
+    pub fn summary(&self) -> &RunSummary {
+        &self.summary
+    }
+
+    /// Advance over one raw IMU interval.
+    pub fn propagate(&mut self, raw: &ImuSample) {
+        let s = self.imu_errors.compensate(raw);
+        let (next, info) = self.mech.step(&self.nav, &s);
+        self.nav = next;
+        if s.dt > 0.0 {
+            self.w_ib_b = s.dtheta / s.dt;
+        }
+        self.acc.dt += s.dt;
+        self.acc.dv_f_n += info.dv_f_n;
+        self.acc.dtheta += s.dtheta;
+        self.acc.dvel += s.dvel;
+        if self.acc.dt >= self.cfg.filter.covariance_period_s - 1e-9 {
+            self.flush_covariance();
+        }
+    }
+
+    /// Propagate the covariance over the accumulated span (SYSTEM.md §2).
+    pub fn flush_covariance(&mut self) {
+        let a = self.acc;
+        if a.dt <= 0.0 {
+            return;
+        }
+        let mm = MeanMotion {
+            f_n: a.dv_f_n / a.dt,
+            f_b: a.dvel / a.dt,
+            w_b: a.dtheta / a.dt,
+        };
+        let rw = self.cfg.filter.time_offset.map_or(0.0, |t| t.random_walk);
+        fill_f(
+            &mut self.disc.f,
+            &self.layout,
+            &self.nav,
+            &mm,
+            self.cfg.imu_noise.corr_time_s,
+        );
+        fill_qc(
+            &mut self.disc.qc,
+            &self.layout,
+            &self.nav,
+            &self.cfg.imu_noise,
+            rw,
+        );
+        self.disc.discretize(a.dt);
+        self.filter.predict(&self.disc.phi, &self.disc.qd);
+        self.acc = Accum::default();
+    }
+
+    /// Fuse one aiding measurement; returns true when it was applied.
+    pub fn fuse(&mut self, aiding: Aiding, gate: Option<f64>) -> bool {
+        self.flush_covariance();
+        let ctx = AidingContext {
+            nav: &self.nav,
+            layout: &self.layout,
+            w_ib_b: self.w_ib_b,
+            lever_arm_b: self.cfg.gnss.lever_arm_b,
+        };
+        let Some(lin) = aiding.linearize(&ctx) else {
+            return false;
+        };
+        match self.filter.update(&lin.y, &lin.h, &lin.r, gate) {
+            UpdateOutcome::Applied { dx, .. } => {
+                self.feedback(&dx);
+                true
+            }
+            UpdateOutcome::Rejected { nis, threshold } => {
+                self.summary.events.push(Event::Rejected {
+                    t: self.nav.t,
+                    source: aiding.name(),
+                    nis,
+                    threshold,
+                });
+                false
+            }
+            UpdateOutcome::Singular => {
+                self.summary.events.push(Event::Singular {
+                    t: self.nav.t,
+                    source: aiding.name(),
+                });
+                false
+            }
+        }
+    }
+
+    /// Closed-loop feedback of the error estimate, then implicit reset to zero.
+    fn feedback(&mut self, dx: &DVector<f64>) {
+        let d_pos = Vector3::new(dx[POS], dx[POS + 1], dx[POS + 2]);
+        let d_vel = Vector3::new(dx[VEL], dx[VEL + 1], dx[VEL + 2]);
+        let phi = Vector3::new(dx[ATT], dx[ATT + 1], dx[ATT + 2]);
+        let old_lla = self.nav.lla;
+        self.nav.lla = lla_add_ned(&self.nav.lla, &(-d_pos));
+        self.nav.v_n -= d_vel;
+        // C_true = (I + phi x) C_est.
+        self.nav.q_bn = quat_from_rotvec(&phi) * self.nav.q_bn;
+        self.mech
+            .shift_previous(&(self.nav.lla - old_lla), &(-d_vel));
+        let e = &mut self.imu_errors;
+        for k in 0..3 {
+            e.gyro_bias[k] += dx[BG + k];
+            e.accel_bias[k] += dx[BA + k];
+            e.gyro_scale[k] += dx[SG + k];
+            e.accel_scale[k] += dx[SA + k];
+        }
+        if let Some(i) = self.layout.index(Block::TimeOffset) {
+            self.time_offset_s -= dx[i];
+        }
+    }
+
+    /// Loosely coupled GNSS update: position, then velocity if present and enabled.
+    pub fn update_gnss(&mut self, fix: &GnssFix) {
+        let mut f = *fix;
+        let g = &self.cfg.gnss;
+        if let Some(s) = g.position_std_override {
+            f.std_ned = s;
+        }
+        if let (Some(s), true) = (g.velocity_std_override, f.vel_ned.is_some()) {
+            f.vel_std_ned = Some(s);
+        }
+        let use_vel = g.use_velocity;
+        let used = self.fuse(Aiding::GnssPosition(&f), self.gate3);
+        if used {
+            self.summary.gnss_used += 1;
+        } else {
+            self.summary.gnss_rejected += 1;
+        }
+        if use_vel && f.vel_ned.is_some() {
+            self.fuse(Aiding::GnssVelocity(&f), self.gate3);
+        }
+    }
+
+    /// Roll, pitch, yaw [rad] of the current attitude.
+    pub fn rpy(&self) -> Vector3<f64> {
+        euler_from_q_bn(&self.nav.q_bn)
+    }
+}
+
+/// Why a run could not start.
+#[derive(Clone, Debug, PartialEq)]
+pub struct InitError(pub String);
+
+impl std::fmt::Display for InitError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for InitError {}
+
+/// Initial position and attitude from the configuration, or found from the data
+/// (levelling window `window`, GNSS course, first GNSS fix). SYSTEM.md §1.
+pub fn initial_pose(
+    cfg: &NavConfig,
+    t0: f64,
+    window: &[ImuSample],
+    gnss: &[GnssFix],
+) -> Result<(Vector3<f64>, Vector3<f64>), InitError> {
+    let rpy = match cfg.initial.attitude {
+        AttitudeInit::Given(rpy) => rpy,
+        AttitudeInit::LevelAndGnssCourse { min_speed_mps, .. } => {
+            let (f_b, _) = alignment::mean_motion(window).ok_or_else(|| {
+                InitError("alignment: no IMU samples in the levelling window".into())
+            })?;
+            let (roll, pitch) = alignment::level(&f_b);
+            let (_, yaw) = alignment::first_course(gnss, t0, min_speed_mps).ok_or_else(|| {
+                InitError(format!(
+                    "alignment: no GNSS epoch after t = {t0:.3} with a horizontal speed of at least {min_speed_mps} m/s, so the initial yaw is unknown (give initial.attitude_deg)"
+                ))
+            })?;
+            Vector3::new(roll, pitch, yaw)
+        }
+    };
+    let lla = match cfg.initial.lla {
+        Some(lla) => lla,
+        None => {
+            let fix = gnss.iter().find(|f| f.t >= t0 - 0.5).ok_or_else(|| {
+                InitError(format!(
+                    "no initial position given and no GNSS fix at or after t = {t0:.3}"
+                ))
+            })?;
+            let l_n = c_bn_from_euler(&rpy) * cfg.gnss.lever_arm_b;
+            lla_add_ned(&fix.lla, &(-l_n))
+        }
+    };
+    Ok((lla, rpy))
+}
+
+/// Run the navigator over an IMU stream and a time-sorted list of GNSS fixes.
+///
+/// `on_output` is called at every IMU epoch (`output_period_s = None`) or at the
+/// first epoch at or after each multiple of the period; `on_progress` every 8192
+/// samples with the current time. The first IMU sample at or after
+/// `cfg.start_time` fixes the initial epoch (its own interval is not integrated).
+/// With alignment, the samples of the levelling window are buffered, the initial
+/// attitude is computed, and the window is then navigated like any other data.
+pub fn run<E: From<InitError>>(
+    cfg: &NavConfig,
+    imu: impl Iterator<Item = Result<ImuSample, E>>,
+    gnss: &[GnssFix],
+    output_period_s: Option<f64>,
+    mut on_output: impl FnMut(&Navigator) -> Result<(), E>,
+    mut on_progress: impl FnMut(f64),
+) -> Result<RunSummary, E> {
+    let end = cfg.end_time.unwrap_or(f64::INFINITY);
+    let mut imu = imu.filter(|r| r.as_ref().map_or(true, |s| s.t >= cfg.start_time));
+    // Initial epoch and, for alignment, the levelling window.
+    let first = match imu.next() {
+        Some(r) => r?,
+        None => return Ok(RunSummary::default()),
+    };
+    let t0 = first.t;
+    let mut window = Vec::new();
+    if let AttitudeInit::LevelAndGnssCourse { level_window_s, .. } = cfg.initial.attitude {
+        for r in imu.by_ref() {
+            let s = r?;
+            let full = s.t > t0 + level_window_s;
+            window.push(s);
+            if full {
+                break;
+            }
+        }
+    }
+    let (lla0, rpy0) = initial_pose(cfg, t0, &window[..window.len().saturating_sub(1)], gnss)?;
+    let mut n = Navigator::new(cfg, t0, lla0, rpy0);
+    let mut gi = 0usize;
+    // Fixes up to the initial epoch are not used.
+    while gi < gnss.len() && gnss[gi].t + n.time_offset() <= t0 {
+        gi += 1;
+    }
+    n.summary.gnss_before_start = gi;
+    let mut t_prev = t0;
+    let period = output_period_s.filter(|p| *p > 0.0);
+    for item in window.into_iter().map(Ok).chain(imu) {
+        let s = item?;
+        if s.t > end {
+            break;
+        }
+        let mut rest = s;
+        while gi < gnss.len() {
+            let fix = &gnss[gi];
+            let t_fix = fix.t + n.time_offset();
+            if t_fix > s.t {
+                break;
+            }
+            gi += 1;
+            if cfg.gnss.outages.contains(fix.t) {
+                n.summary.gnss_in_outage += 1;
+                continue;
+            }
+            // Split the interval at the epoch unless it coincides with an end.
+            let t_begin = rest.t - rest.dt;
+            if t_fix > t_begin + 1e-9 && t_fix < rest.t - 1e-9 {
+                let lambda = (t_fix - t_begin) / rest.dt;
+                let first = ImuSample {
+                    t: t_fix,
+                    dt: rest.dt * lambda,
+                    dtheta: rest.dtheta * lambda,
+                    dvel: rest.dvel * lambda,
+                };
+                n.propagate(&first);
+                rest = ImuSample {
+                    t: rest.t,
+                    dt: rest.dt - first.dt,
+                    dtheta: rest.dtheta - first.dtheta,
+                    dvel: rest.dvel - first.dvel,
+                };
+                n.update_gnss(fix);
+            } else if t_fix >= rest.t - 1e-9 {
+                n.propagate(&rest);
+                rest.dt = 0.0;
+                n.update_gnss(fix);
+            } else {
+                // At or before the start of this interval (e.g. after the time
+                // offset estimate moved): apply now.
+                n.update_gnss(fix);
+            }
+        }
+        if rest.dt > 0.0 {
+            n.propagate(&rest);
+        }
+        n.summary.imu_samples += 1;
+        n.summary.last_t = s.t;
+        let due = match period {
+            None => true,
+            Some(p) => ((s.t + 1e-6) / p).floor() > ((t_prev + 1e-6) / p).floor(),
+        };
+        if due {
+            n.summary.outputs += 1;
+            on_output(&n)?;
+        }
+        if n.summary.imu_samples % 8192 == 0 {
+            on_progress(s.t);
+        }
+        t_prev = s.t;
+    }
+    if let Some(i) = n.layout.index(Block::TimeOffset) {
+        n.summary.time_offset = Some((n.time_offset_s, n.filter.std(i)));
+    }
+    Ok(n.summary.clone())
+}

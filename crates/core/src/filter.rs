@@ -1,0 +1,296 @@
+//! Error-state Kalman filter arithmetic: covariance propagation and the Joseph-form
+//! update with an innovation (chi-square) gate. SYSTEM.md §2.
+//!
+//! The filter runs closed loop: the error estimate is fed back into the nominal
+//! state right after each update and reset to zero, so only the covariance is kept.
+
+use nalgebra::{DMatrix, DVector};
+
+/// Result of one measurement update.
+#[derive(Clone, Debug)]
+pub enum UpdateOutcome {
+    /// Accepted; the error-state estimate to feed back (x_est - x_true).
+    Applied { dx: DVector<f64>, nis: f64 },
+    /// Rejected by the innovation gate: normalised innovation squared and threshold.
+    Rejected { nis: f64, threshold: f64 },
+    /// Innovation covariance not positive definite (measurement dropped).
+    Singular,
+}
+
+/// Covariance of the error state plus scratch space for propagation.
+#[derive(Clone, Debug)]
+pub struct Eskf {
+    pub p: DMatrix<f64>,
+    tmp: DMatrix<f64>,
+    tmp2: DMatrix<f64>,
+}
+
+impl Eskf {
+    pub fn new(p0: DMatrix<f64>) -> Self {
+        let n = p0.nrows();
+        Eskf {
+            p: p0,
+            tmp: DMatrix::zeros(n, n),
+            tmp2: DMatrix::zeros(n, n),
+        }
+    }
+
+    pub fn dim(&self) -> usize {
+        self.p.nrows()
+    }
+
+    /// P = Phi P Phi^T + Qd (SYSTEM.md §2), then symmetrised.
+    pub fn predict(&mut self, phi: &DMatrix<f64>, qd: &DMatrix<f64>) {
+        matmul(&mut self.tmp, phi, &self.p, false, false);
+        self.tmp2.copy_from(qd);
+        matmul(&mut self.tmp2, &self.tmp, phi, true, true);
+        std::mem::swap(&mut self.p, &mut self.tmp2);
+        self.symmetrize();
+    }
+
+    fn symmetrize(&mut self) {
+        let n = self.dim();
+        for i in 0..n {
+            for j in (i + 1)..n {
+                let a = 0.5 * (self.p[(i, j)] + self.p[(j, i)]);
+                self.p[(i, j)] = a;
+                self.p[(j, i)] = a;
+            }
+        }
+    }
+
+    /// Joseph-form update for innovation `y = h(x_est) - z` with Jacobian `h`
+    /// (y ~ H dx + noise) and noise covariance `r`. With `gate = Some(t)`, the update
+    /// is rejected when y^T S^-1 y > t.
+    pub fn update(
+        &mut self,
+        y: &DVector<f64>,
+        h: &DMatrix<f64>,
+        r: &DMatrix<f64>,
+        gate: Option<f64>,
+    ) -> UpdateOutcome {
+        let ph_t = &self.p * h.transpose();
+        let s = h * &ph_t + r;
+        let Some(chol) = s.clone().cholesky() else {
+            return UpdateOutcome::Singular;
+        };
+        let s_inv_y = chol.solve(y);
+        let nis = y.dot(&s_inv_y);
+        if !nis.is_finite() {
+            return UpdateOutcome::Singular;
+        }
+        if let Some(t) = gate {
+            if nis > t {
+                return UpdateOutcome::Rejected { nis, threshold: t };
+            }
+        }
+        // K = P H^T S^-1, computed as (S^-1 H P)^T since S is symmetric.
+        let k = chol.solve(&ph_t.transpose()).transpose();
+        let dx = &k * y;
+        let n = self.dim();
+        let mut i_kh = DMatrix::<f64>::identity(n, n);
+        i_kh.gemm(-1.0, &k, h, 1.0);
+        self.tmp.gemm(1.0, &i_kh, &self.p, 0.0);
+        let krk = &k * r * k.transpose();
+        self.p.copy_from(&krk);
+        self.p.gemm(1.0, &self.tmp, &i_kh.transpose(), 1.0);
+        self.symmetrize();
+        UpdateOutcome::Applied { dx, nis }
+    }
+
+    /// 1-sigma of each state.
+    pub fn std(&self, i: usize) -> f64 {
+        self.p[(i, i)].max(0.0).sqrt()
+    }
+}
+
+/// dst (+)= lhs * rhs (or lhs * rhs^T) via faer on zero-copy views of the
+/// column-major nalgebra storage (about 7x faster than nalgebra's gemm at 21x21).
+fn matmul(dst: &mut DMatrix<f64>, lhs: &DMatrix<f64>, rhs: &DMatrix<f64>, rhs_t: bool, add: bool) {
+    use faer::{linalg::matmul::matmul as fm, Accum, MatMut, MatRef, Par};
+    let (m, n) = dst.shape();
+    let l = MatRef::from_column_major_slice(lhs.as_slice(), lhs.nrows(), lhs.ncols());
+    let r = MatRef::from_column_major_slice(rhs.as_slice(), rhs.nrows(), rhs.ncols());
+    let r = if rhs_t { r.transpose() } else { r };
+    let d = MatMut::from_column_major_slice_mut(dst.as_mut_slice(), m, n);
+    let acc = if add { Accum::Add } else { Accum::Replace };
+    fm(d, acc, l, r, 1.0, Par::Seq);
+}
+
+/// Upper-tail chi-square quantile: the value x with P(X > x) = `p` for `dof` degrees
+/// of freedom (Wilson-Hilferty approximation refined by Newton steps on the exact
+/// CDF for dof <= 6; accurate to better than 0.1 % for p in [1e-9, 0.5]).
+pub fn chi2_threshold(dof: usize, p: f64) -> f64 {
+    let k = dof as f64;
+    let z = normal_upper_quantile(p);
+    let a = 2.0 / (9.0 * k);
+    let mut x = k * (1.0 - a + z * a.sqrt()).powi(3);
+    if dof <= 6 {
+        for _ in 0..30 {
+            let f = chi2_upper_tail(dof, x) - p;
+            let pdf = chi2_pdf(dof, x);
+            if pdf <= 0.0 {
+                break;
+            }
+            let step = f / pdf;
+            x = (x + step).max(1e-12);
+            if step.abs() < 1e-12 * x {
+                break;
+            }
+        }
+    }
+    x
+}
+
+fn chi2_pdf(dof: usize, x: f64) -> f64 {
+    let k = dof as f64 / 2.0;
+    ((k - 1.0) * x.ln() - x / 2.0 - k * 2f64.ln() - ln_gamma_half(dof)).exp()
+}
+
+/// ln Gamma(dof / 2) for small integer dof.
+fn ln_gamma_half(dof: usize) -> f64 {
+    let mut g: f64 = if dof % 2 == 0 {
+        1.0
+    } else {
+        std::f64::consts::PI.sqrt()
+    };
+    let mut a = if dof % 2 == 0 { 1.0 } else { 0.5 };
+    while a < dof as f64 / 2.0 {
+        g *= a;
+        a += 1.0;
+    }
+    g.ln()
+}
+
+/// Exact upper tail of chi-square for integer dof (closed forms).
+fn chi2_upper_tail(dof: usize, x: f64) -> f64 {
+    let h = x / 2.0;
+    if dof % 2 == 0 {
+        let mut term = 1.0;
+        let mut sum = 1.0;
+        for i in 1..dof / 2 {
+            term *= h / i as f64;
+            sum += term;
+        }
+        (-h).exp() * sum
+    } else {
+        let mut tail = erfc((h).sqrt());
+        let mut term = (h.sqrt() * 2.0 / std::f64::consts::PI.sqrt()) * (-h).exp();
+        let mut a = 0.5;
+        while a + 1.0 <= dof as f64 / 2.0 {
+            tail += term;
+            a += 1.0;
+            term *= h / a;
+        }
+        tail
+    }
+}
+
+fn erfc(x: f64) -> f64 {
+    // Numerical Recipes erfc (Chebyshev), relative error < 1.2e-7.
+    let z = x.abs();
+    let t = 1.0 / (1.0 + 0.5 * z);
+    let r = t
+        * (-z * z - 1.265_512_23
+            + t * (1.000_023_68
+                + t * (0.374_091_96
+                    + t * (0.096_784_18
+                        + t * (-0.186_288_06
+                            + t * (0.278_868_07
+                                + t * (-1.135_203_98
+                                    + t * (1.488_515_87
+                                        + t * (-0.822_152_23 + t * 0.170_872_77)))))))))
+            .exp();
+    if x >= 0.0 {
+        r
+    } else {
+        2.0 - r
+    }
+}
+
+/// Upper-tail standard normal quantile (Acklam's rational approximation).
+fn normal_upper_quantile(p: f64) -> f64 {
+    let q = 1.0 - p.clamp(1e-300, 1.0 - 1e-16);
+    const A: [f64; 6] = [
+        -3.969683028665376e1,
+        2.209460984245205e2,
+        -2.759285104469687e2,
+        1.383577518672690e2,
+        -3.066479806614716e1,
+        2.506628277459239,
+    ];
+    const B: [f64; 5] = [
+        -5.447609879822406e1,
+        1.615858368580409e2,
+        -1.556989798598866e2,
+        6.680131188771972e1,
+        -1.328068155288572e1,
+    ];
+    const C: [f64; 6] = [
+        -7.784894002430293e-3,
+        -3.223964580411365e-1,
+        -2.400758277161838,
+        -2.549732539343734,
+        4.374664141464968,
+        2.938163982698783,
+    ];
+    const D: [f64; 4] = [
+        7.784695709041462e-3,
+        3.224671290700398e-1,
+        2.445134137142996,
+        3.754408661907416,
+    ];
+    let plow = 0.02425;
+    if q < plow {
+        let r = (-2.0 * q.ln()).sqrt();
+        (((((C[0] * r + C[1]) * r + C[2]) * r + C[3]) * r + C[4]) * r + C[5])
+            / ((((D[0] * r + D[1]) * r + D[2]) * r + D[3]) * r + 1.0)
+    } else if q <= 1.0 - plow {
+        let r = q - 0.5;
+        let s = r * r;
+        (((((A[0] * s + A[1]) * s + A[2]) * s + A[3]) * s + A[4]) * s + A[5]) * r
+            / (((((B[0] * s + B[1]) * s + B[2]) * s + B[3]) * s + B[4]) * s + 1.0)
+    } else {
+        let r = (-2.0 * (1.0 - q).ln()).sqrt();
+        -(((((C[0] * r + C[1]) * r + C[2]) * r + C[3]) * r + C[4]) * r + C[5])
+            / ((((D[0] * r + D[1]) * r + D[2]) * r + D[3]) * r + 1.0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn chi2_quantiles() {
+        // Table values: chi2(3) upper 1e-4 = 21.108, chi2(3) upper 0.05 = 7.815, chi2(1) 0.01 = 6.635.
+        assert!((chi2_threshold(3, 1e-4) - 21.108).abs() < 0.01);
+        assert!((chi2_threshold(3, 0.05) - 7.815).abs() < 0.005);
+        assert!((chi2_threshold(1, 0.01) - 6.635).abs() < 0.005);
+        assert!((chi2_threshold(6, 1e-3) - 22.458).abs() < 0.01);
+    }
+
+    #[test]
+    fn scalar_update_matches_closed_form() {
+        let mut f = Eskf::new(DMatrix::from_diagonal(&DVector::from_vec(vec![4.0, 1.0])));
+        let h = DMatrix::from_row_slice(1, 2, &[1.0, 0.0]);
+        let r = DMatrix::from_element(1, 1, 1.0);
+        let y = DVector::from_vec(vec![2.0]);
+        match f.update(&y, &h, &r, None) {
+            UpdateOutcome::Applied { dx, nis } => {
+                assert!((dx[0] - 1.6).abs() < 1e-12);
+                assert!(dx[1].abs() < 1e-12);
+                assert!((nis - 0.8).abs() < 1e-12);
+            }
+            o => panic!("{o:?}"),
+        }
+        assert!((f.p[(0, 0)] - 0.8).abs() < 1e-12);
+        assert!((f.p[(1, 1)] - 1.0).abs() < 1e-12);
+        // A wild innovation is gated.
+        let y = DVector::from_vec(vec![100.0]);
+        assert!(matches!(
+            f.update(&y, &h, &r, Some(10.0)),
+            UpdateOutcome::Rejected { .. }
+        ));
+    }
+}

@@ -1,0 +1,113 @@
+//! Error-state layout. The 21 INS states come first in a fixed order; later aiding
+//! sources append their own blocks (time offset today; receiver clock, odometer
+//! scale and mounting later) without changing the filter.
+//!
+//! Error conventions (x_est - x_true): position error in NED metres, velocity error
+//! NED [m/s], attitude error phi with C_b^n,est = (I - phi x) C_b^n,true, sensor
+//! errors in SI (rad/s, m/s², unitless scale).
+
+/// A named block of error states.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Block {
+    Position,
+    Velocity,
+    Attitude,
+    GyroBias,
+    AccelBias,
+    GyroScale,
+    AccelScale,
+    /// GNSS-to-IMU time offset [s].
+    TimeOffset,
+}
+
+impl Block {
+    pub fn len(self) -> usize {
+        match self {
+            Block::TimeOffset => 1,
+            _ => 3,
+        }
+    }
+}
+
+/// The filter's state vector: an ordered list of blocks.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StateLayout {
+    blocks: Vec<(Block, usize)>,
+    n: usize,
+}
+
+/// Indices of the 21 INS states (the layout always starts with them).
+pub const POS: usize = 0;
+pub const VEL: usize = 3;
+pub const ATT: usize = 6;
+pub const BG: usize = 9;
+pub const BA: usize = 12;
+pub const SG: usize = 15;
+pub const SA: usize = 18;
+pub const N_INS: usize = 21;
+
+impl StateLayout {
+    /// Position, velocity, attitude, gyro/accel bias, gyro/accel scale (21 states).
+    pub fn ins21() -> Self {
+        let mut l = StateLayout {
+            blocks: Vec::new(),
+            n: 0,
+        };
+        for b in [
+            Block::Position,
+            Block::Velocity,
+            Block::Attitude,
+            Block::GyroBias,
+            Block::AccelBias,
+            Block::GyroScale,
+            Block::AccelScale,
+        ] {
+            l.push(b);
+        }
+        l
+    }
+
+    /// Append a block (no-op if present). Returns its first index.
+    pub fn push(&mut self, b: Block) -> usize {
+        if let Some(i) = self.index(b) {
+            return i;
+        }
+        let i = self.n;
+        self.blocks.push((b, i));
+        self.n += b.len();
+        i
+    }
+
+    /// First index of a block, if the layout has it.
+    pub fn index(&self, b: Block) -> Option<usize> {
+        self.blocks.iter().find(|(k, _)| *k == b).map(|(_, i)| *i)
+    }
+
+    /// Total number of states.
+    pub fn len(&self) -> usize {
+        self.n
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.n == 0
+    }
+
+    pub fn blocks(&self) -> impl Iterator<Item = (Block, usize)> + '_ {
+        self.blocks.iter().copied()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn layout_extends() {
+        let mut l = StateLayout::ins21();
+        assert_eq!(l.len(), N_INS);
+        assert_eq!(l.index(Block::AccelScale), Some(SA));
+        assert_eq!(l.push(Block::TimeOffset), 21);
+        assert_eq!(l.push(Block::TimeOffset), 21);
+        assert_eq!(l.len(), 22);
+    }
+}
