@@ -4,6 +4,7 @@
 
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
+use navfuse_core::config::TimeOffsetConfig;
 use navfuse_core::outage::OutageSchedule;
 use navfuse_core::{GnssFix, Navigator, RunSummary};
 use navfuse_io::config::{self, RunConfig};
@@ -51,16 +52,54 @@ pub fn main(
     Ok(())
 }
 
+/// The GNSS-IMU time offset line found by the estimation pass.
+#[derive(Clone, Copy, Debug)]
+pub struct TimeOffsetFit {
+    pub tau0: f64,
+    pub tau0_sd: f64,
+    pub rate: f64,
+    pub rate_sd: f64,
+    pub t0: f64,
+}
+
 /// What a finished run reports.
 pub struct JobResult {
     pub summary: RunSummary,
     pub wall: Duration,
     pub files: Vec<PathBuf>,
     pub gnss_fixes: usize,
-    pub input_notes: Vec<String>,
+    pub time_offset: Option<TimeOffsetFit>,
 }
 
 impl JobResult {
+    /// The run summary as JSON (written to DIR/summary.json).
+    pub fn to_json(&self) -> serde_json::Value {
+        let s = &self.summary;
+        serde_json::json!({
+            "imu_samples": s.imu_samples,
+            "t_first": s.first_t,
+            "t_last": s.last_t,
+            "wall_s": self.wall.as_secs_f64(),
+            "outputs": s.outputs,
+            "gnss": {
+                "fixes": self.gnss_fixes,
+                "used": s.gnss_used,
+                "rejected": s.gnss_rejected,
+                "in_outages": s.gnss_in_outage,
+                "before_start": s.gnss_before_start,
+            },
+            "time_offset": self.time_offset.map(|f| serde_json::json!({
+                "offset_s_at_start": f.tau0,
+                "offset_sigma_s": f.tau0_sd,
+                "rate_ppm": f.rate * 1e6,
+                "rate_sigma_ppm": f.rate_sd * 1e6,
+                "t_start": f.t0,
+            })),
+            "events": s.events.iter().map(|e| e.to_string()).collect::<Vec<_>>(),
+            "files": self.files.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
+        })
+    }
+
     pub fn summary_line(&self) -> String {
         let s = &self.summary;
         let span = (s.last_t - s.first_t).max(0.0);
@@ -74,10 +113,10 @@ impl JobResult {
             s.imu_samples, s.first_t, s.last_t, span, self.wall.as_secs_f64(), speed,
             s.gnss_used, self.gnss_fixes, s.gnss_rejected, s.gnss_in_outage
         );
-        if let Some((to, sd)) = s.time_offset {
+        if let Some(f) = &self.time_offset {
             line.push_str(&format!(
-                "; GNSS-IMU time offset {:.4} s (1-sigma {:.4})",
-                to, sd
+                "; GNSS-IMU time offset {:.4} s at t {:.1} (1-sigma {:.4}), rate {:.1} ppm (1-sigma {:.1}), estimated in a first pass; output times are GNSS time",
+                f.tau0, f.t0, f.tau0_sd, f.rate * 1e6, f.rate_sd * 1e6
             ));
         }
         let names: Vec<String> = self.files.iter().map(|p| p.display().to_string()).collect();
@@ -92,6 +131,7 @@ pub fn run_job(mut cfg: RunConfig, out_dir: &Path, progress: bool) -> Result<Job
     let mut input_notes = Vec::new();
     let mut reader = open_imu(&cfg.imu).map_err(|e| anyhow::anyhow!("{e}"))?;
     let imu_week = reader.gps_week();
+    let mut time_offset_pass1 = None;
     let (mut fixes, gnss_week): (Vec<GnssFix>, Option<u32>) = match &cfg.gnss {
         Some(src) => {
             let g = read_gnss(src).map_err(|e| anyhow::anyhow!("{e}"))?;
@@ -127,6 +167,42 @@ pub fn run_job(mut cfg: RunConfig, out_dir: &Path, progress: bool) -> Result<Job
         first_t
     };
     cfg.resolve_relative_outages(run_start);
+
+    // GNSS-IMU time offset: pass 1 estimates offset and rate as filter states; pass 2
+    // navigates with the resulting line tau(t) = tau0 + rate (t - t0) held fixed, so that
+    // solution time tags (on the GNSS time scale) stay monotonic.
+    if let Some(to) = cfg.nav.filter.time_offset {
+        if to.std_s > 0.0 {
+            let pass1_reader = open_imu(&cfg.imu).map_err(|e| anyhow::anyhow!("{e}"))?;
+            let s1 = navfuse_core::run(
+                &cfg.nav,
+                pass1_reader.map(|r| r.map_err(|e| anyhow::anyhow!("{e}"))),
+                &fixes,
+                Some(f64::INFINITY),
+                |_| Ok(()),
+                |_| {},
+            )
+            .context("time-offset estimation pass")?;
+            if let Some((tau_end, sd)) = s1.time_offset {
+                let (rate, rate_sd) = s1.time_offset_rate.unwrap_or((to.initial_rate, 0.0));
+                let tau0 = tau_end - rate * (s1.last_t - s1.first_t);
+                time_offset_pass1 = Some(TimeOffsetFit {
+                    tau0,
+                    tau0_sd: sd,
+                    rate,
+                    rate_sd,
+                    t0: s1.first_t,
+                });
+                cfg.nav.filter.time_offset = Some(TimeOffsetConfig {
+                    initial_s: tau0,
+                    std_s: 0.0,
+                    random_walk: 0.0,
+                    initial_rate: rate,
+                    rate_std: 0.0,
+                });
+            }
+        }
+    }
 
     std::fs::create_dir_all(out_dir)
         .with_context(|| format!("cannot create output directory {}", out_dir.display()))?;
@@ -170,27 +246,56 @@ pub fn run_job(mut cfg: RunConfig, out_dir: &Path, progress: bool) -> Result<Job
         None
     };
 
-    let want_std = std_w.is_some() || csv_w.as_ref().is_some_and(|_| cfg.output.std);
-    let mut write = |n: &Navigator| -> Result<()> {
-        let nav = *n.nav();
-        let (wk, t) = split_week(week, nav.t);
-        let rec = SolutionRecord {
-            gps_week: wk,
-            nav: navfuse_core::NavState { t, ..nav },
-            imu_errors: *n.imu_errors(),
-            std: if want_std { Some(n.std21()) } else { None },
-        };
-        nav_w.write(&rec).map_err(|e| anyhow::anyhow!("{e}"))?;
-        if let Some(w) = err_w.as_mut() {
-            w.write(&rec).map_err(|e| anyhow::anyhow!("{e}"))?;
+    // Records go to a writer thread in batches: formatting text costs about as much
+    // as navigating, and the machine has two cores.
+    let want_std = std_w.is_some() || (csv_w.is_some() && cfg.output.std);
+    let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<SolutionRecord>>(8);
+    let writer = std::thread::spawn(move || -> Result<()> {
+        let io = |e: navfuse_io::InputError| anyhow::anyhow!("{e}");
+        let mut failed = None;
+        for batch in rx {
+            for rec in &batch {
+                let r = (|| {
+                    nav_w.write(rec)?;
+                    if let Some(w) = err_w.as_mut() {
+                        w.write(rec)?;
+                    }
+                    if let Some(w) = std_w.as_mut() {
+                        w.write(rec)?;
+                    }
+                    if let Some(w) = csv_w.as_mut() {
+                        w.write(rec)?;
+                    }
+                    Ok::<(), navfuse_io::InputError>(())
+                })();
+                if let Err(e) = r {
+                    failed = Some(io(e));
+                    break;
+                }
+            }
+            if failed.is_some() {
+                break;
+            }
         }
-        if let Some(w) = std_w.as_mut() {
-            w.write(&rec).map_err(|e| anyhow::anyhow!("{e}"))?;
+        // Whatever happened, keep what was computed: flush every writer.
+        for r in [
+            nav_w.finish(),
+            err_w.map_or(Ok(()), |w| w.finish()),
+            std_w.map_or(Ok(()), |w| w.finish()),
+            csv_w.map_or(Ok(()), |w| w.finish()),
+        ] {
+            if let Err(e) = r {
+                failed.get_or_insert(io(e));
+            }
         }
-        if let Some(w) = csv_w.as_mut() {
-            w.write(&rec).map_err(|e| anyhow::anyhow!("{e}"))?;
-        }
-        Ok(())
+        failed.map_or(Ok(()), Err)
+    });
+    const BATCH: usize = 2048;
+    let mut batch: Vec<SolutionRecord> = Vec::with_capacity(BATCH);
+    let send = |batch: &mut Vec<SolutionRecord>| -> Result<()> {
+        let full = std::mem::replace(batch, Vec::with_capacity(BATCH));
+        tx.send(full)
+            .map_err(|_| anyhow::anyhow!("the output writer stopped"))
     };
     let result = navfuse_core::run(
         &cfg.nav,
@@ -201,7 +306,20 @@ pub fn run_job(mut cfg: RunConfig, out_dir: &Path, progress: bool) -> Result<Job
         ),
         &fixes,
         cfg.output.rate_hz.map(|r| 1.0 / r),
-        &mut write,
+        |n: &Navigator| {
+            let nav = *n.nav();
+            let (wk, t) = split_week(week, n.time_gnss());
+            batch.push(SolutionRecord {
+                gps_week: wk,
+                nav: navfuse_core::NavState { t, ..nav },
+                imu_errors: *n.imu_errors(),
+                std: if want_std { Some(n.std21()) } else { None },
+            });
+            if batch.len() == BATCH {
+                send(&mut batch)?;
+            }
+            Ok(())
+        },
         |t| {
             if let Some(b) = &bar {
                 b.set_position(((t - run_start) * 10.0).max(0.0) as u64);
@@ -209,22 +327,19 @@ pub fn run_job(mut cfg: RunConfig, out_dir: &Path, progress: bool) -> Result<Job
             }
         },
     );
-    drop(write);
+    let sent = if batch.is_empty() {
+        Ok(())
+    } else {
+        send(&mut batch)
+    };
+
+    drop(tx);
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
-    // Whatever happened, keep what was computed: flush every writer first.
-    let mut flush_err = None;
-    for r in [
-        nav_w.finish(),
-        err_w.map_or(Ok(()), |w| w.finish()),
-        std_w.map_or(Ok(()), |w| w.finish()),
-        csv_w.map_or(Ok(()), |w| w.finish()),
-    ] {
-        if let Err(e) = r {
-            flush_err.get_or_insert(anyhow::anyhow!("{e}"));
-        }
-    }
+    let written = writer
+        .join()
+        .map_err(|_| anyhow::anyhow!("the output writer panicked"))?;
     let report = reader.report().to_string();
     let summary = result.with_context(|| {
         format!(
@@ -232,9 +347,8 @@ pub fn run_job(mut cfg: RunConfig, out_dir: &Path, progress: bool) -> Result<Job
             out_dir.display()
         )
     })?;
-    if let Some(e) = flush_err {
-        return Err(e);
-    }
+    written?;
+    sent?;
     // Event log: rejected fixes and input findings.
     let ev_path = out_dir.join("events.log");
     let mut ev = std::fs::File::create(&ev_path)
@@ -260,13 +374,21 @@ pub fn run_job(mut cfg: RunConfig, out_dir: &Path, progress: bool) -> Result<Job
             );
         }
     }
-    Ok(JobResult {
+    let mut job = JobResult {
         summary,
         wall: t_wall.elapsed(),
         files,
         gnss_fixes: fixes.len(),
-        input_notes,
-    })
+        time_offset: time_offset_pass1,
+    };
+    let sum_path = out_dir.join("summary.json");
+    job.files.push(sum_path.clone());
+    std::fs::write(
+        &sum_path,
+        serde_json::to_string_pretty(&job.to_json())? + "\n",
+    )
+    .with_context(|| format!("cannot write {}", sum_path.display()))?;
+    Ok(job)
 }
 
 /// Normalise (week, t) so that t is in [0, 604800).

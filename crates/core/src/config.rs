@@ -58,15 +58,22 @@ pub struct InitialState {
     pub imu_errors_std: ImuErrors,
 }
 
-/// Optional estimation of the GNSS-to-IMU time offset (a filter state).
+/// GNSS-to-IMU time offset tau(t) = tau0 + rate * (t - t0): a GNSS epoch tagged t is
+/// applied at IMU time t + tau. Estimated as filter states when the stds are > 0
+/// (the rate state absorbs a clock-rate difference between the IMU time tags and GPS
+/// time, e.g. a logger clock that runs a few hundred ppm off).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TimeOffsetConfig {
-    /// Initial value [s]: a GNSS epoch tagged t is applied at IMU time t + offset.
+    /// Offset at the start of the run [s].
     pub initial_s: f64,
-    /// Initial 1-sigma [s].
+    /// Initial 1-sigma of the offset [s]; 0 = known, not estimated.
     pub std_s: f64,
     /// Random-walk PSD of the offset [s²/s] (0 = constant).
     pub random_walk: f64,
+    /// Offset rate [s/s] at the start.
+    pub initial_rate: f64,
+    /// Initial 1-sigma of the rate [s/s]; 0 = no rate state (rate stays `initial_rate`).
+    pub rate_std: f64,
 }
 
 /// How GNSS fixes are used.

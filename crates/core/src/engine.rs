@@ -59,8 +59,10 @@ pub struct RunSummary {
     pub gnss_before_start: usize,
     pub outputs: usize,
     pub events: Vec<Event>,
-    /// Final GNSS-IMU time-offset estimate and its 1-sigma [s], when estimated.
+    /// Final GNSS-IMU time offset at `last_t` and its 1-sigma [s], when estimated.
     pub time_offset: Option<(f64, f64)>,
+    /// Final time-offset rate and its 1-sigma [s/s], when estimated.
+    pub time_offset_rate: Option<(f64, f64)>,
 }
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -81,6 +83,7 @@ pub struct Navigator {
     nav: NavState,
     imu_errors: ImuErrors,
     time_offset_s: f64,
+    time_offset_rate: f64,
     acc: Accum,
     w_ib_b: Vector3<f64>,
     gate3: Option<f64>,
@@ -92,8 +95,13 @@ impl Navigator {
     /// [rad]; the rest (velocity, IMU errors, uncertainties) from `cfg.initial`.
     pub fn new(cfg: &NavConfig, t0: f64, lla: Vector3<f64>, rpy: Vector3<f64>) -> Self {
         let mut layout = StateLayout::ins21();
-        if cfg.filter.time_offset.is_some() {
-            layout.push(Block::TimeOffset);
+        if let Some(to) = cfg.filter.time_offset {
+            if to.std_s > 0.0 {
+                layout.push(Block::TimeOffset);
+                if to.rate_std > 0.0 {
+                    layout.push(Block::TimeOffsetRate);
+                }
+            }
         }
         let n = layout.len();
         let ini = &cfg.initial;
@@ -108,10 +116,16 @@ impl Navigator {
             p0[SG + k] = e.gyro_scale[k].powi(2);
             p0[SA + k] = e.accel_scale[k].powi(2);
         }
-        let mut time_offset_s = 0.0;
-        if let (Some(to), Some(i)) = (cfg.filter.time_offset, layout.index(Block::TimeOffset)) {
-            p0[i] = to.std_s.powi(2);
+        let (mut time_offset_s, mut time_offset_rate) = (0.0, 0.0);
+        if let Some(to) = cfg.filter.time_offset {
             time_offset_s = to.initial_s;
+            time_offset_rate = to.initial_rate;
+            if let Some(i) = layout.index(Block::TimeOffset) {
+                p0[i] = to.std_s.powi(2);
+            }
+            if let Some(i) = layout.index(Block::TimeOffsetRate) {
+                p0[i] = to.rate_std.powi(2);
+            }
         }
         let nav = NavState {
             t: t0,
@@ -129,6 +143,7 @@ impl Navigator {
             nav,
             imu_errors: ini.imu_errors,
             time_offset_s,
+            time_offset_rate,
             acc: Accum::default(),
             w_ib_b: Vector3::zeros(),
             gate3,
@@ -156,9 +171,16 @@ impl Navigator {
         &self.filter.p
     }
 
-    /// Current GNSS-IMU time offset estimate [s] (0 when not estimated).
+    /// Current GNSS-IMU time offset estimate [s] (0 when not estimated): a GNSS
+    /// epoch tagged t is applied at IMU time t + offset.
     pub fn time_offset(&self) -> f64 {
         self.time_offset_s
+    }
+
+    /// Time of the current state on the GNSS (GPS) time scale: the IMU time tag
+    /// minus the estimated GNSS-IMU offset. Solutions are written with this time.
+    pub fn time_gnss(&self) -> f64 {
+        self.nav.t - self.time_offset_s
     }
 
     /// 1-sigma of the 21 INS states in SI units (pos N E D, vel N E D, att r p y,
@@ -179,6 +201,7 @@ impl Navigator {
     /// Advance over one raw IMU interval.
     pub fn propagate(&mut self, raw: &ImuSample) {
         let s = self.imu_errors.compensate(raw);
+        self.time_offset_s += self.time_offset_rate * s.dt;
         let (next, info) = self.mech.step(&self.nav, &s);
         self.nav = next;
         if s.dt > 0.0 {
@@ -282,6 +305,14 @@ impl Navigator {
         if let Some(i) = self.layout.index(Block::TimeOffset) {
             self.time_offset_s -= dx[i];
         }
+        if let Some(i) = self.layout.index(Block::TimeOffsetRate) {
+            self.time_offset_rate -= dx[i];
+        }
+    }
+
+    /// Current GNSS-IMU time offset rate [s/s].
+    pub fn time_offset_rate(&self) -> f64 {
+        self.time_offset_rate
     }
 
     /// Loosely coupled GNSS update: position, then velocity if present and enabled.
@@ -472,6 +503,9 @@ pub fn run<E: From<InitError>>(
     }
     if let Some(i) = n.layout.index(Block::TimeOffset) {
         n.summary.time_offset = Some((n.time_offset_s, n.filter.std(i)));
+    }
+    if let Some(i) = n.layout.index(Block::TimeOffsetRate) {
+        n.summary.time_offset_rate = Some((n.time_offset_rate, n.filter.std(i)));
     }
     Ok(n.summary.clone())
 }

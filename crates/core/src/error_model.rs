@@ -41,7 +41,8 @@ pub fn fill_f(
     mm: &MeanMotion,
     corr_time_s: f64,
 ) {
-    f.fill(0.0);
+    // Slice operations: nalgebra's element iterators are slow at this size.
+    f.as_mut_slice().fill(0.0);
     let (lat, h) = (nav.lla.x, nav.lla.z);
     let (vn, ve, vd) = (nav.v_n.x, nav.v_n.y, nav.v_n.z);
     let (rm, rn) = radii(lat);
@@ -130,8 +131,13 @@ pub fn fill_f(
     for i in BG..SA + 3 {
         f[(i, i)] = decay;
     }
-    // Other blocks (time offset, ...) are random walks or constants: F rows stay zero.
-    let _ = layout;
+    // Time offset: tau_dot = tau_rate. Other blocks are random walks or constants.
+    if let (Some(i), Some(j)) = (
+        layout.index(Block::TimeOffset),
+        layout.index(Block::TimeOffsetRate),
+    ) {
+        f[(i, j)] = 1.0;
+    }
 }
 
 /// Diagonal of the continuous process noise G Qc G^T where G maps white noise into
@@ -144,7 +150,7 @@ pub fn fill_qc(
     noise: &ImuNoise,
     time_offset_rw: f64,
 ) {
-    qc.fill(0.0);
+    qc.as_mut_slice().fill(0.0);
     let c_bn = nav.q_bn.to_rotation_matrix().into_inner();
     let va = Matrix3::from_diagonal(&noise.vrw.component_mul(&noise.vrw));
     let ag = Matrix3::from_diagonal(&noise.arw.component_mul(&noise.arw));
@@ -192,12 +198,14 @@ impl Discretizer {
     /// Build Phi and Qd from the current `f` and `qc`.
     pub fn discretize(&mut self, dt: f64) {
         let n = self.f.nrows();
-        self.phi.copy_from(&self.f);
-        self.phi *= dt;
-        for i in 0..n {
-            self.phi[(i, i)] += 1.0;
+        for (p, f) in self.phi.as_mut_slice().iter_mut().zip(self.f.as_slice()) {
+            *p = f * dt;
         }
-        self.qd.copy_from(&self.qc);
-        self.qd *= dt;
+        for i in 0..n {
+            self.phi.as_mut_slice()[i * n + i] += 1.0;
+        }
+        for (q, c) in self.qd.as_mut_slice().iter_mut().zip(self.qc.as_slice()) {
+            *q = c * dt;
+        }
     }
 }

@@ -42,7 +42,7 @@ impl Eskf {
     /// P = Phi P Phi^T + Qd (SYSTEM.md §2), then symmetrised.
     pub fn predict(&mut self, phi: &DMatrix<f64>, qd: &DMatrix<f64>) {
         matmul(&mut self.tmp, phi, &self.p, false, false);
-        self.tmp2.copy_from(qd);
+        self.tmp2.as_mut_slice().copy_from_slice(qd.as_slice());
         matmul(&mut self.tmp2, &self.tmp, phi, true, true);
         std::mem::swap(&mut self.p, &mut self.tmp2);
         self.symmetrize();
@@ -50,11 +50,12 @@ impl Eskf {
 
     fn symmetrize(&mut self) {
         let n = self.dim();
+        let p = self.p.as_mut_slice();
         for i in 0..n {
             for j in (i + 1)..n {
-                let a = 0.5 * (self.p[(i, j)] + self.p[(j, i)]);
-                self.p[(i, j)] = a;
-                self.p[(j, i)] = a;
+                let a = 0.5 * (p[i * n + j] + p[j * n + i]);
+                p[i * n + j] = a;
+                p[j * n + i] = a;
             }
         }
     }
@@ -88,12 +89,13 @@ impl Eskf {
         let k = chol.solve(&ph_t.transpose()).transpose();
         let dx = &k * y;
         let n = self.dim();
+        // Joseph form: P = (I - K H) P (I - K H)^T + K R K^T.
         let mut i_kh = DMatrix::<f64>::identity(n, n);
         i_kh.gemm(-1.0, &k, h, 1.0);
-        self.tmp.gemm(1.0, &i_kh, &self.p, 0.0);
-        let krk = &k * r * k.transpose();
-        self.p.copy_from(&krk);
-        self.p.gemm(1.0, &self.tmp, &i_kh.transpose(), 1.0);
+        matmul(&mut self.tmp, &i_kh, &self.p, false, false);
+        let kr = &k * r;
+        matmul(&mut self.p, &kr, &k, true, false);
+        matmul(&mut self.p, &self.tmp, &i_kh, true, true);
         self.symmetrize();
         UpdateOutcome::Applied { dx, nis }
     }

@@ -22,6 +22,43 @@ pub struct StepInfo {
 pub struct Mechanizer {
     prev_imu: Option<ImuSample>,
     prev_nav: Option<NavState>,
+    earth: Option<EarthAt>,
+}
+
+/// Earth quantities at a latitude and height. They change by less than 1e-7 of their
+/// value over 0.6 m of latitude or 5 cm of height, so they are recomputed only when
+/// the position moves that much (gravity error < 2e-7 m/s², radius error < 1e-7).
+#[derive(Clone, Copy, Debug)]
+struct EarthAt {
+    lat: f64,
+    h: f64,
+    sin_lat: f64,
+    cos_lat: f64,
+    rm: f64,
+    rn: f64,
+    g: f64,
+}
+
+impl EarthAt {
+    fn new(lat: f64, h: f64) -> Self {
+        let (sin_lat, cos_lat) = lat.sin_cos();
+        let w2 = 1.0 - WGS84_E2 * sin_lat * sin_lat;
+        let rn = WGS84_A / w2.sqrt();
+        let rm = rn * (1.0 - WGS84_E2) / w2;
+        EarthAt {
+            lat,
+            h,
+            sin_lat,
+            cos_lat,
+            rm,
+            rn,
+            g: gravity_normal_sc(sin_lat, h),
+        }
+    }
+
+    fn near(&self, lat: f64, h: f64) -> bool {
+        (lat - self.lat).abs() < 1e-7 && (h - self.h).abs() < 0.05
+    }
 }
 
 impl Mechanizer {
@@ -33,6 +70,7 @@ impl Mechanizer {
     pub fn reset(&mut self) {
         self.prev_imu = None;
         self.prev_nav = None;
+        self.earth = None;
     }
 
     /// Advance `nav` over one compensated IMU interval ending at `imu.t`.
@@ -64,20 +102,21 @@ impl Mechanizer {
         };
         // One set of Earth quantities at mid-interval serves the velocity, position
         // and attitude updates (latitude moves < 1e-7 rad per IMU interval).
-        let (sl, cl) = lat_m.sin_cos();
-        let w2 = 1.0 - WGS84_E2 * sl * sl;
-        let rn = WGS84_A / w2.sqrt();
-        let rm = rn * (1.0 - WGS84_E2) / w2;
-        let w_ie = Vector3::new(OMEGA_IE * cl, 0.0, -OMEGA_IE * sl);
-        let en = |v: &Vector3<f64>| {
-            Vector3::new(
-                v.y / (rn + h_m),
-                -v.x / (rm + h_m),
-                -v.y * sl / cl / (rn + h_m),
-            )
+        let e = match self.earth {
+            Some(e) if e.near(lat_m, h_m) => e,
+            _ => {
+                let e = EarthAt::new(lat_m, h_m);
+                self.earth = Some(e);
+                e
+            }
         };
+        let (sl, cl) = (e.sin_lat, e.cos_lat);
+        let w_ie = Vector3::new(OMEGA_IE * cl, 0.0, -OMEGA_IE * sl);
+        let (k_n, k_m) = (1.0 / (e.rn + h_m), 1.0 / (e.rm + h_m));
+        let k_t = k_n * sl / cl;
+        let en = |v: &Vector3<f64>| Vector3::new(v.y * k_n, -v.x * k_m, -v.y * k_t);
         let w_en = en(&v_m);
-        let g_n = Vector3::new(0.0, 0.0, gravity_normal_sc(sl, h_m));
+        let g_n = Vector3::new(0.0, 0.0, e.g);
 
         // Velocity: rotation and sculling corrections (two-sample).
         let dv_f_b = dv + 0.5 * dth.cross(&dv) + (dth_prev.cross(&dv) + dv_prev.cross(&dth)) / 12.0;
@@ -90,9 +129,8 @@ impl Mechanizer {
         // Position: trapezoidal velocity.
         let v_avg = 0.5 * (nav.v_n + v_new);
         let h_new = nav.lla.z - v_avg.z * dt;
-        let h_avg = 0.5 * (nav.lla.z + h_new);
-        let lat_new = nav.lla.x + v_avg.x / (rm + h_avg) * dt;
-        let lon_new = nav.lla.y + v_avg.y / ((rn + h_avg) * cl) * dt;
+        let lat_new = nav.lla.x + v_avg.x * k_m * dt;
+        let lon_new = nav.lla.y + v_avg.y * k_n / cl * dt;
 
         // Attitude: body rotation with coning correction, n-frame rotation at mid-interval.
         let phi_b = dth + dth_prev.cross(&dth) / 12.0;

@@ -18,12 +18,14 @@ pub enum Block {
     AccelScale,
     /// GNSS-to-IMU time offset [s].
     TimeOffset,
+    /// Rate of the GNSS-to-IMU time offset [s/s].
+    TimeOffsetRate,
 }
 
 impl Block {
     pub fn len(self) -> usize {
         match self {
-            Block::TimeOffset => 1,
+            Block::TimeOffset | Block::TimeOffsetRate => 1,
             _ => 3,
         }
     }

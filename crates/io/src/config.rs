@@ -676,6 +676,10 @@ struct TTimeOffset {
     std_s: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     random_walk: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    initial_rate_ppm: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    rate_std_ppm: Option<f64>,
 }
 
 #[derive(Debug, Default, Deserialize, Serialize)]
@@ -1003,10 +1007,28 @@ fn convert(raw: TomlRoot, base: &Path) -> KResult<Converted> {
                 "filter.time_offset.random_walk",
                 t.random_walk.unwrap_or(0.0),
             )?;
-            t.estimate.unwrap_or(true).then_some(TimeOffsetConfig {
+            let initial_rate = finite(
+                "filter.time_offset.initial_rate_ppm",
+                t.initial_rate_ppm.unwrap_or(0.0),
+            )? * 1e-6;
+            let rate_std = non_negative(
+                "filter.time_offset.rate_std_ppm",
+                t.rate_std_ppm.unwrap_or(0.0),
+            )? * 1e-6;
+            Some(TimeOffsetConfig {
                 initial_s,
-                std_s,
+                std_s: if t.estimate.unwrap_or(true) {
+                    std_s
+                } else {
+                    0.0
+                },
                 random_walk,
+                initial_rate,
+                rate_std: if t.estimate.unwrap_or(true) {
+                    rate_std
+                } else {
+                    0.0
+                },
             })
         }
     };
@@ -1516,10 +1538,12 @@ fn to_raw(c: &RunConfig) -> TomlRoot {
     let filter = TFilter {
         covariance_period_s: Some(c.nav.filter.covariance_period_s),
         time_offset: c.nav.filter.time_offset.map(|t| TTimeOffset {
-            estimate: Some(true),
+            estimate: Some(t.std_s > 0.0),
             initial_s: Some(t.initial_s),
-            std_s: Some(t.std_s),
+            std_s: (t.std_s > 0.0).then_some(t.std_s),
             random_walk: Some(t.random_walk),
+            initial_rate_ppm: Some(t.initial_rate * 1e6),
+            rate_std_ppm: Some(t.rate_std * 1e6),
         }),
     };
     TomlRoot {

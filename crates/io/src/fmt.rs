@@ -137,45 +137,134 @@ const POW10: [f64; 23] = [
     1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
 ];
 
-/// Parse a decimal number. Plain `[-+]digits[.digits]` with at most 15-16 significant
-/// digits takes an exact fast path (integer mantissa divided by an exact power of ten:
-/// one correctly rounded operation); anything else (exponents, long mantissas, `nan`,
-/// `inf`) goes to `str::parse::<f64>`. The result can be NaN or infinite: callers
-/// check. None if the text is not a number.
+/// Parse a decimal number. Plain `[-+]digits[.digits]` with at most 19 digits and a
+/// mantissa up to 2^53 takes an exact fast path (integer mantissa divided by an exact
+/// power of ten: one correctly rounded operation); anything else (exponents, long
+/// mantissas, `nan`, `inf`) goes to `str::parse::<f64>`. The result can be NaN or
+/// infinite: callers check. None if the text is not a number.
 pub fn parse_f64(s: &[u8]) -> Option<f64> {
-    let (neg, digits) = match s.first() {
-        Some(b'-') => (true, s.get(1..).unwrap_or(&[])),
-        Some(b'+') => (false, s.get(1..).unwrap_or(&[])),
-        _ => (false, s),
+    match parse_prefix(s) {
+        Some((v, len)) if len == s.len() => Some(v),
+        _ => std::str::from_utf8(s).ok()?.parse::<f64>().ok(),
+    }
+}
+
+/// The fast path of [`parse_f64`] on the start of `s`: a plain decimal number that
+/// ends at the end of `s` or at a field separator (space, tab, comma, CR). Returns the
+/// value and its length, or None (not plain, too long, or followed by other text).
+#[inline]
+pub fn parse_prefix(s: &[u8]) -> Option<(f64, usize)> {
+    let len = s.len();
+    let mut i = 0;
+    let neg = match s.first() {
+        Some(b'-') => {
+            i = 1;
+            true
+        }
+        Some(b'+') => {
+            i = 1;
+            false
+        }
+        _ => false,
     };
+    // Mantissa digits accumulate with wrapping arithmetic: with at most 19 digits
+    // there is no overflow, and longer mantissas are rejected below.
     let mut m: u64 = 0;
-    let mut frac_digits: usize = 0;
-    let mut seen_dot = false;
-    let mut n_digits = 0usize;
-    let mut fast = !digits.is_empty();
-    for &b in digits {
-        if b.is_ascii_digit() {
-            if m >= 100_000_000_000_000_000 {
-                fast = false;
-                break;
-            }
-            m = m * 10 + u64::from(b - b'0');
-            n_digits += 1;
-            if seen_dot {
-                frac_digits += 1;
-            }
-        } else if b == b'.' && !seen_dot {
-            seen_dot = true;
-        } else {
-            fast = false;
-            break;
+    let int_start = i;
+    i = take_digits(s, i, &mut m);
+    let int_digits = i - int_start;
+    let mut frac_digits = 0;
+    if i < len && s.get(i) == Some(&b'.') {
+        let frac_start = i + 1;
+        i = take_digits(s, frac_start, &mut m);
+        frac_digits = i - frac_start;
+    }
+    let total = int_digits + frac_digits;
+    if total == 0 || total > 19 || m > (1u64 << 53) {
+        return None;
+    }
+    if let Some(&c) = s.get(i) {
+        if !is_sep(c) {
+            return None;
         }
     }
-    if fast && n_digits > 0 && m <= (1u64 << 53) && frac_digits < POW10.len() {
-        let v = m as f64 / POW10.get(frac_digits).copied().unwrap_or(1.0);
-        return Some(if neg { -v } else { v });
+    let p = POW10.get(frac_digits)?;
+    let v = m as f64 / p;
+    Some((if neg { -v } else { v }, i))
+}
+
+/// Accumulate the ASCII digits of `s` from index `i` into `m` (wrapping), 8 at a time
+/// where possible; returns the index of the first non-digit.
+#[inline(always)]
+fn take_digits(s: &[u8], mut i: usize, m: &mut u64) -> usize {
+    while let Some(chunk) = s.get(i..i + 8) {
+        let mut b = [0u8; 8];
+        b.copy_from_slice(chunk);
+        let w = u64::from_le_bytes(b);
+        // All eight bytes are '0'..='9'?
+        if (w & 0xF0F0_F0F0_F0F0_F0F0)
+            | (((w.wrapping_add(0x0606_0606_0606_0606)) & 0xF0F0_F0F0_F0F0_F0F0) >> 4)
+            != 0x3333_3333_3333_3333
+        {
+            break;
+        }
+        // Eight digits to a number (first byte most significant), as in simdjson.
+        const MASK: u64 = 0x0000_00FF_0000_00FF;
+        const MUL1: u64 = 100 + (1_000_000 << 32);
+        const MUL2: u64 = 1 + (10_000 << 32);
+        let mut v = w - 0x3030_3030_3030_3030;
+        v = v.wrapping_mul(10).wrapping_add(v >> 8);
+        v = (v & MASK)
+            .wrapping_mul(MUL1)
+            .wrapping_add(((v >> 16) & MASK).wrapping_mul(MUL2))
+            >> 32;
+        *m = m.wrapping_mul(100_000_000).wrapping_add(v);
+        i += 8;
     }
-    std::str::from_utf8(s).ok()?.parse::<f64>().ok()
+    while let Some(&c) = s.get(i) {
+        let digit = c.wrapping_sub(b'0');
+        if digit > 9 {
+            break;
+        }
+        *m = m.wrapping_mul(10).wrapping_add(u64::from(digit));
+        i += 1;
+    }
+    i
+}
+
+/// Parse the first `N` fields of a line as plain decimal numbers in one pass, if they
+/// all take the fast path and are separated by whitespace and at most one comma.
+/// None means "use the general path" (which also produces the precise error).
+#[inline]
+pub fn parse_first_n<const N: usize>(line: &[u8]) -> Option<[f64; N]> {
+    let mut out = [0.0; N];
+    let mut i = skip_ws(line, 0);
+    for (k, slot) in out.iter_mut().enumerate() {
+        if k > 0 {
+            i = skip_ws(line, i);
+            if line.get(i) == Some(&b',') {
+                i = skip_ws(line, i + 1);
+            }
+        }
+        let (v, len) = parse_prefix(line.get(i..)?)?;
+        if len == 0 {
+            return None;
+        }
+        *slot = v;
+        i += len;
+    }
+    Some(out)
+}
+
+#[inline(always)]
+fn skip_ws(s: &[u8], mut i: usize) -> usize {
+    while let Some(&c) = s.get(i) {
+        if !is_ws(c) {
+            break;
+        }
+        i += 1;
+    }
+    i
 }
 
 /// Parse a plain integer `[-+]digits` (no dot, no exponent), None otherwise.
@@ -198,73 +287,26 @@ pub fn parse_i64(s: &[u8]) -> Option<i64> {
     Some(if neg { -v } else { v })
 }
 
-const DIGIT_PAIRS: &[u8; 200] = b"0001020304050607080910111213141516171819\
-2021222324252627282930313233343536373839\
-4041424344454647484950515253545556575859\
-6061626364656667686970717273747576777879\
-8081828384858687888990919293949596979899";
-
 /// Append `v` with exactly 9 decimals, byte for byte as `format!("{:.9}", v)`.
 ///
-/// Fast path for |v| < 4e6: `x = |v| * 1e9` is within half an ulp of the exact
-/// product, so rounding `x` to an integer is exact unless the fraction of `x` is
-/// within that error of one half; such near-ties, larger values and non-finite values
-/// use `write!`.
-pub fn push_fixed9(out: &mut Vec<u8>, v: f64) {
-    let a = v.abs();
-    if a < 4.0e6 {
-        let x = a * 1e9;
-        let fl = x.floor();
-        let f = x - fl;
-        // |x - exact| <= ulp(x)/2 <= x * 2^-53; keep a factor of 4 of margin.
-        let margin = x * 4.5e-16;
-        if (f - 0.5).abs() > margin {
-            let n = fl as u64 + u64::from(f > 0.5);
-            if v.is_sign_negative() {
-                out.push(b'-');
-            }
-            push_u64_with_frac9(out, n);
-            return;
-        }
-    }
-    let _ = write!(out, "{v:.9}");
-}
-
-/// Append `n / 1e9` as `INT.FFFFFFFFF`.
+/// Fast path for |v| < 4e6: |v| = m 2^e exactly, so |v| 1e9 = m 1e9 / 2^-e is rounded
+/// to the nearest integer exactly in 128-bit integer arithmetic; exact decimal ties,
+/// larger values and non-finite values use `write!`.
 #[inline]
-fn push_u64_with_frac9(out: &mut Vec<u8>, n: u64) {
-    let mut int = n / 1_000_000_000;
-    let mut frac = (n % 1_000_000_000) as u32;
-    // Integer part, at most 20 digits.
-    let mut tmp = [0u8; 20];
-    let mut pos = tmp.len();
-    loop {
-        let d = (int % 10) as u8;
-        int /= 10;
-        pos -= 1;
-        if let Some(slot) = tmp.get_mut(pos) {
-            *slot = b'0' + d;
-        }
-        if int == 0 || pos == 0 {
-            break;
+pub fn push_fixed9(out: &mut Vec<u8>, v: f64) {
+    // Digits go straight into the vector (no staging buffer: copying one after byte
+    // stores costs a store-forwarding stall); a fixed-size resize then a truncate
+    // beat a variable-length copy.
+    let start = out.len();
+    out.extend_from_slice(&[b' '; 24]);
+    let len = out.get_mut(start..).and_then(|b| fixed9_fast(v, b));
+    match len {
+        Some(len) => out.truncate(start + len),
+        None => {
+            out.truncate(start);
+            let _ = write!(out, "{v:.9}");
         }
     }
-    out.extend_from_slice(tmp.get(pos..).unwrap_or(&[]));
-    // Fraction: 9 digits = 4 pairs + 1.
-    let mut f = [0u8; 10];
-    f[0] = b'.';
-    let last = frac % 10;
-    frac /= 10;
-    f[9] = b'0' + last as u8;
-    let mut p = 9;
-    while p > 1 {
-        let pair = (frac % 100) as usize;
-        frac /= 100;
-        f[p - 2] = DIGIT_PAIRS[2 * pair];
-        f[p - 1] = DIGIT_PAIRS[2 * pair + 1];
-        p -= 2;
-    }
-    out.extend_from_slice(&f);
 }
 
 /// Append one field as C `"%-15.9lf "`: 9 decimals, left-justified in 15 characters,
@@ -272,12 +314,105 @@ fn push_u64_with_frac9(out: &mut Vec<u8>, n: u64) {
 #[inline]
 pub fn push_kf_field(out: &mut Vec<u8>, v: f64) {
     let start = out.len();
-    push_fixed9(out, v);
-    let width = out.len() - start;
-    if width < 15 {
-        out.resize(start + 15, b' ');
+    out.extend_from_slice(&[b' '; 24]);
+    let len = out.get_mut(start..).and_then(|b| fixed9_fast(v, b));
+    match len {
+        Some(len) => out.truncate(start + len.max(15) + 1),
+        None => {
+            out.truncate(start);
+            let _ = write!(out, "{v:.9}");
+            let width = out.len() - start;
+            if width < 15 {
+                out.resize(start + 15, b' ');
+            }
+            out.push(b' ');
+        }
     }
-    out.push(b' ');
+}
+
+/// The fast path of [`push_fixed9`]: writes into `buf` (at least 18 bytes) from index
+/// 0 and returns the length (at most 18), or None when `write!` must be used.
+#[inline(always)]
+fn fixed9_fast(v: f64, buf: &mut [u8]) -> Option<usize> {
+    let a = v.abs();
+    if a.is_nan() || a >= 4.0e6 {
+        return None;
+    }
+    // Quick path: x = a * 1e9 < 4e15 < 2^52 is within ulp(x)/2 <= x * 2^-53 of the
+    // exact product, so rounding x gives the right integer unless x's fraction is
+    // that close to one half.
+    let x = a * 1e9;
+    let t = x as i64; // truncation = floor for 0 <= x < 2^52
+    let f = x - t as f64; // exact
+    let n = if (f - 0.5).abs() > x * 1.2e-16 {
+        (t + i64::from(f > 0.5)) as u64
+    } else {
+        round_1e9_exact(a)?
+    };
+    // n < 4e15: 7 integer digits and 9 fraction digits. `hi` holds the integer
+    // digits and the first fraction digit, `lo` the other 8 fraction digits.
+    let hi = (n / 100_000_000) as u32; // <= 4e7
+    let lo = (n % 100_000_000) as u32;
+    let mut pos = 0;
+    if v.is_sign_negative() {
+        *buf.first_mut()? = b'-';
+        pos = 1;
+    }
+    let dh = swar8(hi);
+    // Drop leading zero digits (low bytes), keeping at least one integer digit.
+    let zeros = (dh.trailing_zeros() / 8).min(6);
+    let w = dh >> (8 * zeros);
+    let ndig = 7 - zeros; // 1..=7 integer digits
+    let int_mask = (1u64 << (8 * ndig)) - 1;
+    let first_frac = (w >> (8 * ndig)) & 0xff;
+    let word =
+        (w & int_mask) + (0x3030_3030_3030_3030 & int_mask) + (u64::from(b'.') << (8 * ndig));
+    let ndig = ndig as usize;
+    buf.get_mut(pos..pos + 8)?
+        .copy_from_slice(&word.to_le_bytes());
+    *buf.get_mut(pos + ndig + 1)? = b'0' + first_frac as u8;
+    buf.get_mut(pos + ndig + 2..pos + ndig + 10)?
+        .copy_from_slice(&(swar8(lo) | 0x3030_3030_3030_3030).to_le_bytes());
+    Some(pos + ndig + 10)
+}
+
+/// Round a * 1e9 (0 <= a < 4e6) to the nearest integer exactly: a = m 2^e with
+/// e < 0, so a * 1e9 = m 1e9 / 2^-e, done in 128-bit integers. None on an exact tie.
+fn round_1e9_exact(a: f64) -> Option<u64> {
+    let bits = a.to_bits();
+    let biased = ((bits >> 52) & 0x7ff) as i32;
+    let mant = bits & ((1u64 << 52) - 1);
+    let (m, e) = if biased == 0 {
+        (mant, -1074)
+    } else {
+        (mant | (1u64 << 52), biased - 1075)
+    };
+    let s = u32::try_from(-e).ok().filter(|&s| s > 0)?;
+    let p = u128::from(m) * 1_000_000_000u128; // < 2^83
+    if s >= 84 {
+        return Some(0); // p < 2^83 <= 2^(s-1): below one half
+    }
+    let q = p >> s;
+    let rem = p & ((1u128 << s) - 1);
+    let half = 1u128 << (s - 1);
+    if rem == half {
+        return None; // exact decimal tie: let `write!` apply its rule
+    }
+    u64::try_from(q + u128::from(rem > half)).ok()
+}
+
+/// The 8 decimal digits of `n` < 1e8, most significant first in little-endian byte
+/// order, as digit values 0-9 (add 0x30 per byte for ASCII). SIMD-within-a-register:
+/// split into two 4-digit lanes, then pairs, then digits, with multiply-shift
+/// divisions exact over the lane ranges (checked exhaustively in the tests).
+#[inline(always)]
+fn swar8(n: u32) -> u64 {
+    let n = u64::from(n);
+    let x = (n / 10_000) | ((n % 10_000) << 32);
+    let hi100 = ((x * 10_486) >> 20) & 0x0000_007F_0000_007F;
+    let x = ((x - hi100 * 100) << 16) | hi100;
+    let hi10 = ((x * 103) >> 10) & 0x000F_000F_000F_000F;
+    ((x - hi10 * 10) << 8) | hi10
 }
 
 #[cfg(test)]
@@ -350,13 +485,44 @@ mod tests {
         for i in 0..400_000 {
             let r = next();
             let u = (r >> 11) as f64 / (1u64 << 53) as f64; // [0, 1)
-            let mag = 10f64.powi((i % 17) as i32 - 10);
+            let mag = 10f64.powi(i % 17 - 10);
             let sign = if r & 1 == 1 { -1.0 } else { 1.0 };
             let v = sign * u * mag;
             assert_eq!(fixed(v), format!("{v:.9}"), "value {v:e}");
             // Values with exactly 10 decimals (ties and near-ties in decimal).
             let d = sign * ((r >> 20) % 10_000_000_000_000) as f64 / 1e10;
             assert_eq!(fixed(d), format!("{d:.9}"), "value {d:e}");
+        }
+    }
+
+    #[test]
+    fn exact_rounding_agrees_with_std() {
+        let mut s: u64 = 77;
+        for _ in 0..300_000 {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            let a = (s >> 11) as f64 / (1u64 << 53) as f64 * 4e6 / 10f64.powi((s % 12) as i32);
+            if let Some(n) = round_1e9_exact(a) {
+                let want = format!("{a:.9}").replace('.', "");
+                assert_eq!(n, want.parse::<u64>().unwrap(), "{a:e}");
+            }
+        }
+        assert_eq!(round_1e9_exact(0.0), Some(0));
+        assert_eq!(round_1e9_exact(0.0009765625), None); // exact tie
+        assert_eq!(round_1e9_exact(5e-324), Some(0));
+    }
+
+    #[test]
+    fn swar8_exhaustive() {
+        for n in 0..100_000_000u32 {
+            let d = swar8(n) | 0x3030_3030_3030_3030;
+            let want = n / 10_000 * 10_000 + n % 10_000; // keep the optimiser honest
+            let mut v = 0u32;
+            for b in d.to_le_bytes() {
+                v = v * 10 + u32::from(b - b'0');
+            }
+            assert_eq!(v, want, "{n}");
         }
     }
 
@@ -428,6 +594,22 @@ mod tests {
                 assert_eq!(a.to_bits(), b.to_bits(), "{txt}");
             }
         }
+    }
+
+    #[test]
+    fn first_n_fast_path() {
+        assert_eq!(
+            parse_first_n::<3>(b"  1.5, -2\t3 junk"),
+            Some([1.5, -2.0, 3.0])
+        );
+        assert_eq!(parse_first_n::<3>(b"1 2"), None);
+        assert_eq!(parse_first_n::<3>(b"1,,2,3"), None);
+        assert_eq!(parse_first_n::<3>(b"1 2 3e5"), None);
+        assert_eq!(parse_first_n::<2>(b"1 2x 3"), None);
+        assert_eq!(parse_first_n::<1>(b"# 1"), None);
+        assert_eq!(parse_first_n::<1>(b"-"), None);
+        assert_eq!(parse_first_n::<1>(b"."), None);
+        assert_eq!(parse_first_n::<2>(b"1.\r2\r"), Some([1.0, 2.0]));
     }
 
     #[test]

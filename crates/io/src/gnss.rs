@@ -50,7 +50,7 @@ pub fn read_gnss(src: &GnssSource) -> Result<GnssData, InputError> {
     }
     let decimate_us = match src.decimate_s {
         None => None,
-        Some(d) if d.is_finite() && d >= 0.002 && d <= 1e6 => Some((d * 1e6).round() as i64),
+        Some(d) if (0.002..=1e6).contains(&d) => Some((d * 1e6).round() as i64),
         Some(d) => {
             return Err(InputError::new(
                 path,

@@ -19,7 +19,7 @@
 //!   v_sensor with `sensor_to_body_rpy_deg`.
 
 use crate::error::InputError;
-use crate::fmt::{field, parse_f64, parse_i64, split_fields, LineReader};
+use crate::fmt::{field, parse_f64, parse_first_n, parse_i64, split_fields, LineReader};
 use crate::input::{
     AccelUnit, CsvImuOptions, GyroUnit, ImuFormat, ImuQuantity, ImuSource, RateSampling, TimeScale,
     TimeUnit,
@@ -470,6 +470,15 @@ fn parse_kfgins(
     fields: &mut Vec<(usize, usize)>,
     offset: f64,
 ) -> Result<Option<Raw>, InputError> {
+    // One-pass fast path for plain numbers; the general path below handles the rest
+    // (comments, other number forms) and gives the precise error.
+    if let Some([t, gx, gy, gz, ax, ay, az]) = parse_first_n::<7>(line) {
+        return Ok(Some((
+            t + offset,
+            Vector3::new(gx, gy, gz),
+            Vector3::new(ax, ay, az),
+        )));
+    }
     split_fields(line, fields);
     if is_comment(line, fields) {
         return Ok(None);

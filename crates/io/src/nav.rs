@@ -42,7 +42,8 @@ pub fn nav_fields(r: &SolutionRecord) -> [f64; 11] {
     let n = &r.nav;
     let rpy = euler_from_q_bn(&n.q_bn);
     let mut yaw = wrap_2pi(rpy.z).to_degrees();
-    if !(yaw < 359.999_999_999_49) && yaw.is_finite() {
+    // Values that would print as 360.000000000 become 0.
+    if yaw >= 359.999_999_999_49 && yaw.is_finite() {
         yaw = 0.0;
     }
     [

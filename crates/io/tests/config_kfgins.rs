@@ -100,18 +100,25 @@ fn check_demo(c: &navfuse_io::config::RunConfig, dir: &Path) {
     assert_eq!(n.corr_time_s, 14400.0);
 
     let i = &c.nav.initial;
-    assert_close3(&i.lla, [30.4447873701 * D2R, 114.4718632047 * D2R, 20.899]);
+    assert_close3(
+        &i.lla.expect("initpos"),
+        [30.4447873701 * D2R, 114.4718632047 * D2R, 20.899],
+    );
     assert_close3(&i.v_n, [0.0; 3]);
     // initatt in radians
+    let rpy = match i.attitude {
+        navfuse_core::config::AttitudeInit::Given(r) => r,
+        other => panic!("initatt must give the attitude, got {other:?}"),
+    };
     assert_close3(
-        &i.rpy,
+        &rpy,
         [
             0.85421502 * PI / 180.0,
             -2.03480295 * PI / 180.0,
             185.70235133 * PI / 180.0,
         ],
     );
-    assert!((i.rpy.z - 3.2411).abs() < 1e-4);
+    assert!((rpy.z - 3.2411).abs() < 1e-4);
     assert_close3(&i.pos_std, [0.005, 0.004, 0.008]);
     assert_close3(&i.vel_std, [0.003, 0.004, 0.004]);
     assert_close3(&i.att_std, [0.003 * D2R, 0.003 * D2R, 0.023 * D2R]);
@@ -128,7 +135,10 @@ fn check_demo(c: &navfuse_io::config::RunConfig, dir: &Path) {
     assert_eq!(go.gate_probability, None);
     assert_eq!(go.position_std_override, None);
     assert!(go.outages.is_empty());
-    assert_eq!(c.nav.filter.covariance_period_s, 0.0);
+    assert_eq!(
+        c.nav.filter.covariance_period_s,
+        navfuse_core::config::DEFAULT_COVARIANCE_PERIOD_S
+    );
     assert_eq!(c.nav.filter.time_offset, None);
     assert_eq!(c.output.rate_hz, None);
     assert!(c.output.imu_err && c.output.std && !c.output.csv);

@@ -192,10 +192,16 @@ fn check_full(c: &RunConfig, base: &Path) {
 
     // [initial]
     let i = &c.nav.initial;
-    assert_close3(&i.lla, [30.4447873701 * D2R, 114.4718632047 * D2R, 20.899]);
-    assert_close3(&i.v_n, [1.0, -2.0, 0.5]);
     assert_close3(
-        &i.rpy,
+        &i.lla.expect("position"),
+        [30.4447873701 * D2R, 114.4718632047 * D2R, 20.899],
+    );
+    assert_close3(&i.v_n, [1.0, -2.0, 0.5]);
+    let navfuse_core::config::AttitudeInit::Given(rpy) = i.attitude else {
+        panic!("attitude_deg must give the attitude");
+    };
+    assert_close3(
+        &rpy,
         [0.85421502 * D2R, -2.03480295 * D2R, 185.70235133 * D2R],
     );
     assert_close3(&i.pos_std, [0.005, 0.004, 0.008]);
@@ -280,7 +286,10 @@ fn defaults() {
         i.imu_errors_std.accel_scale,
         c.nav.imu_noise.accel_scale_std
     );
-    assert_eq!(c.nav.filter.covariance_period_s, 0.0);
+    assert_eq!(
+        c.nav.filter.covariance_period_s,
+        navfuse_core::config::DEFAULT_COVARIANCE_PERIOD_S
+    );
     assert_eq!(c.nav.filter.time_offset, None);
     assert_eq!(c.output.rate_hz, None);
     assert!(c.output.imu_err && c.output.std && !c.output.csv);
@@ -317,9 +326,14 @@ fn defaults() {
     let c = load_toml(&tmp("toff_defaults.toml", &text)).unwrap();
     let t = c.nav.filter.time_offset.unwrap();
     assert_eq!((t.initial_s, t.std_s, t.random_walk), (0.0, 0.5, 0.0));
-    let text = format!("{MINIMAL}\n[filter]\ntime_offset = {{ estimate = false }}\n");
+    // estimate = false: a known offset (and rate), applied but not estimated.
+    let text = format!(
+        "{MINIMAL}\n[filter]\ntime_offset = {{ estimate = false, initial_s = 0.25, initial_rate_ppm = 300 }}\n"
+    );
     let c = load_toml(&tmp("toff_off.toml", &text)).unwrap();
-    assert_eq!(c.nav.filter.time_offset, None);
+    let t = c.nav.filter.time_offset.unwrap();
+    assert_eq!((t.initial_s, t.std_s, t.rate_std), (0.25, 0.0, 0.0));
+    assert!((t.initial_rate - 300e-6).abs() < 1e-15);
 }
 
 #[test]
