@@ -30,7 +30,11 @@ enum Command {
     ///
     /// Writes DIR/solution.nav (KF-GINS 11 columns), and as configured DIR/imu_err.txt,
     /// DIR/std.txt, DIR/solution.csv; DIR/events.log lists rejected GNSS fixes and input
-    /// problems. A progress bar is drawn on stderr when it is a terminal.
+    /// findings; DIR/summary.json holds the run's counts and the estimated GNSS-IMU time
+    /// offset. When the configuration estimates the time offset, the data are read twice:
+    /// the first pass finds the offset, the second navigates with it and writes the
+    /// solution on the GNSS time scale. A progress bar is drawn on stderr when it is a
+    /// terminal; a one-line summary is printed at the end.
     Run {
         /// navfuse TOML configuration (docs/CONFIG.md); a .yaml file is read as KF-GINS.
         #[arg(required_unless_present = "kf_gins", conflicts_with = "kf_gins")]
@@ -58,7 +62,9 @@ enum Command {
     /// position, velocity and roll/pitch/yaw errors; with --gaps also each outage's
     /// maximum error and the RMS of those maxima.
     Eval {
+        /// The solution: a KF-GINS .nav file (11 columns; week 0 = seconds of week only).
         solution: PathBuf,
+        /// The reference: a .nav file, or an RTKLIB .pos file (recognised by the extension).
         truth: PathBuf,
         /// Outage windows: comma-separated `a:b` and `L/P@T[..U]` (see `run --outages`).
         #[arg(long, value_name = "SPEC")]

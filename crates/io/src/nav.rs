@@ -151,20 +151,21 @@ impl NavWriter {
 /// [mGal], gyro scale xyz [ppm], accel scale xyz [ppm].
 pub struct ImuErrWriter {
     out: Out,
+    same: SameText<12>,
 }
 
 impl ImuErrWriter {
     pub fn create(path: &Path) -> Result<Self, InputError> {
         Ok(ImuErrWriter {
             out: Out::create(path)?,
+            same: SameText::default(),
         })
     }
 
     pub fn write(&mut self, r: &SolutionRecord) -> Result<(), InputError> {
         push_kf_field(&mut self.out.line, r.nav.t);
-        for v in imu_err_fields(&r.imu_errors) {
-            push_kf_field(&mut self.out.line, v);
-        }
+        self.same
+            .push(&mut self.out.line, imu_err_fields(&r.imu_errors));
         self.out.line.push(b'\n');
         self.out.put()
     }
@@ -175,17 +176,54 @@ impl ImuErrWriter {
     }
 }
 
+/// Formatted KF-GINS fields of the last values written. IMU errors change only at
+/// measurement updates and the covariance only every propagation interval, so most
+/// records repeat the previous values bit for bit: their text is copied, not formatted.
+struct SameText<const N: usize> {
+    values: Option<[f64; N]>,
+    text: Vec<u8>,
+}
+
+impl<const N: usize> Default for SameText<N> {
+    fn default() -> Self {
+        SameText {
+            values: None,
+            text: Vec::with_capacity(N * 24),
+        }
+    }
+}
+
+impl<const N: usize> SameText<N> {
+    fn push(&mut self, out: &mut Vec<u8>, values: [f64; N]) {
+        let same = self.values.is_some_and(|p| {
+            p.iter()
+                .zip(&values)
+                .all(|(a, b)| a.to_bits() == b.to_bits())
+        });
+        if !same {
+            self.text.clear();
+            for v in values {
+                push_kf_field(&mut self.text, v);
+            }
+            self.values = Some(values);
+        }
+        out.extend_from_slice(&self.text);
+    }
+}
+
 /// KF-GINS `STD` file, 22 columns: t [s], pos std N E D [m], vel std N E D [m/s], att
 /// std roll pitch yaw [deg], gyro bias std [deg/h], accel bias std [mGal], gyro scale
 /// std [ppm], accel scale std [ppm] (x y z each).
 pub struct StdWriter {
     out: Out,
+    same: SameText<21>,
 }
 
 impl StdWriter {
     pub fn create(path: &Path) -> Result<Self, InputError> {
         Ok(StdWriter {
             out: Out::create(path)?,
+            same: SameText::default(),
         })
     }
 
@@ -198,9 +236,7 @@ impl StdWriter {
             ));
         };
         push_kf_field(&mut self.out.line, r.nav.t);
-        for v in std_fields(std) {
-            push_kf_field(&mut self.out.line, v);
-        }
+        self.same.push(&mut self.out.line, std_fields(std));
         self.out.line.push(b'\n');
         self.out.put()
     }

@@ -143,9 +143,14 @@ pub fn week_sow_to_gpst_unix(week: u32, sow: f64) -> f64 {
 }
 
 /// (GPS week, seconds of week) -> GPST calendar. `sow` may be negative or exceed a
-/// week (it is normalised); it must be finite (non-finite gives the week start).
+/// week (it is normalised); it is clamped to +-1e12 s, and a non-finite `sow` gives
+/// the week start.
 pub fn week_sow_to_calendar(week: u32, sow: f64) -> Calendar {
-    let sow = if sow.is_finite() { sow } else { 0.0 };
+    let sow = if sow.is_finite() {
+        sow.clamp(-1e12, 1e12)
+    } else {
+        0.0
+    };
     let whole = sow.floor();
     let frac = sow - whole;
     let total = i64::from(week) * SECONDS_PER_WEEK + whole as i64; // since GPS epoch
@@ -259,6 +264,17 @@ mod tests {
             let (w, sow) = calendar_to_week_sow(&c).unwrap();
             assert_eq!(week_sow_to_calendar(w, sow), c);
         }
+    }
+
+    #[test]
+    fn extreme_inputs_do_not_panic() {
+        let _ = week_sow_to_calendar(u32::MAX, 1e300);
+        let _ = week_sow_to_calendar(0, -1e300);
+        let _ = week_sow_to_calendar(0, f64::NAN).to_string();
+        assert_eq!(gpst_unix_to_week_sow(f64::INFINITY), None);
+        assert_eq!(gpst_unix_to_week_sow(-1e300), None);
+        assert_eq!(gpst_unix_parts_to_week_sow(i64::MIN, 0.5), None);
+        let _ = gpst_unix_parts_to_week_sow(i64::MAX, 0.5);
     }
 
     #[test]
