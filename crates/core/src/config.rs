@@ -90,9 +90,15 @@ pub struct GnssOptions {
     /// Innovation gate: chi-square tail probability at which a fix is rejected
     /// (e.g. 1e-4); None = no gating (KF-GINS behaviour).
     pub gate_probability: Option<f64>,
+    /// After this long [s] of consecutive gate rejections, the next fix is accepted
+    /// anyway (the filter has drifted, or a step in the GNSS is real); logged.
+    pub gate_timeout_s: f64,
     /// Withheld epochs.
     pub outages: OutageSchedule,
 }
+
+/// Default `GnssOptions::gate_timeout_s` [s].
+pub const DEFAULT_GATE_TIMEOUT_S: f64 = 5.0;
 
 /// Default covariance propagation interval [s]. Propagating every 0.1 s instead of
 /// every IMU sample changes the KF-GINS stand-in results by < 0.01 mm and 1e-5 deg

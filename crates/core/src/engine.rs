@@ -31,6 +31,8 @@ pub enum Event {
     },
     /// A measurement's innovation covariance was singular; dropped.
     Singular { t: f64, source: &'static str },
+    /// Fixes had been rejected for `streak_s` seconds; this one was used ungated.
+    GateBypassed { t: f64, streak_s: f64 },
 }
 
 impl std::fmt::Display for Event {
@@ -43,6 +45,10 @@ impl std::fmt::Display for Event {
             Event::Singular { t, source } => {
                 write!(f, "{t:.3} {source} dropped: innovation covariance not positive definite")
             }
+            Event::GateBypassed { t, streak_s } => write!(
+                f,
+                "{t:.3} gnss fix used without the gate: fixes rejected for {streak_s:.1} s (gate timeout)"
+            ),
         }
     }
 }
@@ -87,6 +93,8 @@ pub struct Navigator {
     acc: Accum,
     w_ib_b: Vector3<f64>,
     gate3: Option<f64>,
+    /// Time of the first of the current run of gate-rejected fixes.
+    reject_streak_since: Option<f64>,
     summary: RunSummary,
 }
 
@@ -147,6 +155,7 @@ impl Navigator {
             acc: Accum::default(),
             w_ib_b: Vector3::zeros(),
             gate3,
+            reject_streak_since: None,
             summary: RunSummary {
                 first_t: t0,
                 last_t: t0,
@@ -266,7 +275,7 @@ impl Navigator {
             }
             UpdateOutcome::Rejected { nis, threshold } => {
                 self.summary.events.push(Event::Rejected {
-                    t: self.nav.t,
+                    t: self.time_gnss(),
                     source: aiding.name(),
                     nis,
                     threshold,
@@ -326,14 +335,26 @@ impl Navigator {
             f.vel_std_ned = Some(s);
         }
         let use_vel = g.use_velocity;
-        let used = self.fuse(Aiding::GnssPosition(&f), self.gate3);
+        let mut gate = self.gate3;
+        if let Some(t0) = self.reject_streak_since {
+            if fix.t - t0 >= g.gate_timeout_s {
+                gate = None;
+                self.summary.events.push(Event::GateBypassed {
+                    t: fix.t,
+                    streak_s: fix.t - t0,
+                });
+            }
+        }
+        let used = self.fuse(Aiding::GnssPosition(&f), gate);
         if used {
             self.summary.gnss_used += 1;
+            self.reject_streak_since = None;
         } else {
             self.summary.gnss_rejected += 1;
+            self.reject_streak_since.get_or_insert(fix.t);
         }
         if use_vel && f.vel_ned.is_some() {
-            self.fuse(Aiding::GnssVelocity(&f), self.gate3);
+            self.fuse(Aiding::GnssVelocity(&f), gate);
         }
     }
 

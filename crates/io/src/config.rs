@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 use nalgebra::Vector3;
 use navfuse_core::config::{
     AttitudeInit, FilterOptions, GnssOptions, ImuNoise, InitialState, NavConfig, TimeOffsetConfig,
-    DEFAULT_COVARIANCE_PERIOD_S,
+    DEFAULT_COVARIANCE_PERIOD_S, DEFAULT_GATE_TIMEOUT_S,
 };
 use navfuse_core::outage::{OutageSchedule, Periodic, Window};
 use navfuse_core::types::ImuErrors;
@@ -568,6 +568,8 @@ struct TGnss {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     gate_probability: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    gate_timeout_s: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     outages: Option<Vec<Vec<f64>>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     outage_every: Option<OneOrMany<TOutageEvery>>,
@@ -840,6 +842,7 @@ fn convert(raw: TomlRoot, base: &Path) -> KResult<Converted> {
                 position_std_override: None,
                 velocity_std_override: None,
                 gate_probability: None,
+                gate_timeout_s: DEFAULT_GATE_TIMEOUT_S,
                 outages: OutageSchedule::default(),
             },
             Vec::new(),
@@ -1249,6 +1252,11 @@ fn convert_gnss(
         }
     };
 
+    let gate_timeout_s = positive(
+        "gnss.gate_timeout_s",
+        g.gate_timeout_s.unwrap_or(DEFAULT_GATE_TIMEOUT_S),
+    )?;
+
     let mut outages = OutageSchedule::default();
     for (k, w) in g.outages.iter().flatten().enumerate() {
         let key = format!("gnss.outages[{k}]");
@@ -1364,6 +1372,7 @@ fn convert_gnss(
         position_std_override,
         velocity_std_override,
         gate_probability,
+        gate_timeout_s,
         outages,
     };
     Ok((src, opts, relative))
@@ -1485,6 +1494,7 @@ fn to_raw(c: &RunConfig) -> TomlRoot {
                 .as_ref()
                 .map(|v| Num3::from3(arr3(v))),
             gate_probability: go.gate_probability,
+            gate_timeout_s: Some(go.gate_timeout_s),
             outages: (!go.outages.windows.is_empty()).then(|| {
                 go.outages
                     .windows
@@ -1917,6 +1927,7 @@ fn kfgins_to_raw(y: KfYaml, w: &mut Vec<String>) -> KResult<(TomlRoot, Option<St
             position_std_m: None,
             velocity_std_mps: None,
             gate_probability: None,
+            gate_timeout_s: None,
             outages: None,
             outage_every: None,
         }),
