@@ -530,3 +530,209 @@ pub fn run<E: From<InitError>>(
     }
     Ok(n.summary.clone())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::{
+        FilterOptions, GnssOptions, ImuNoise, InitialState, DEFAULT_GATE_TIMEOUT_S,
+    };
+    use crate::earth::{gravity_normal, omega_ie_n};
+    use crate::outage::OutageSchedule;
+
+    fn cfg() -> NavConfig {
+        let noise = ImuNoise {
+            arw: Vector3::repeat(1e-5),
+            vrw: Vector3::repeat(1e-4),
+            gyro_bias_std: Vector3::repeat(1e-6),
+            accel_bias_std: Vector3::repeat(1e-4),
+            gyro_scale_std: Vector3::repeat(1e-4),
+            accel_scale_std: Vector3::repeat(1e-4),
+            corr_time_s: 3600.0,
+        };
+        NavConfig {
+            initial: InitialState {
+                lla: Some(Vector3::new(0.6, 2.0, 50.0)),
+                v_n: Vector3::zeros(),
+                attitude: AttitudeInit::Given(Vector3::new(0.0, 0.0, 0.3)),
+                imu_errors: ImuErrors::default(),
+                pos_std: Vector3::repeat(0.1),
+                vel_std: Vector3::repeat(0.01),
+                att_std: Vector3::repeat(0.001),
+                imu_errors_std: ImuErrors {
+                    gyro_bias: noise.gyro_bias_std,
+                    accel_bias: noise.accel_bias_std,
+                    gyro_scale: noise.gyro_scale_std,
+                    accel_scale: noise.accel_scale_std,
+                },
+            },
+            imu_noise: noise,
+            gnss: GnssOptions {
+                lever_arm_b: Vector3::new(0.5, 0.2, -1.0),
+                use_velocity: false,
+                position_std_override: None,
+                velocity_std_override: None,
+                gate_probability: None,
+                gate_timeout_s: DEFAULT_GATE_TIMEOUT_S,
+                outages: OutageSchedule::default(),
+            },
+            filter: FilterOptions {
+                covariance_period_s: 0.0,
+                time_offset: None,
+            },
+            start_time: f64::NEG_INFINITY,
+            end_time: None,
+        }
+    }
+
+    /// Exact increments of a stationary IMU over `dt` (gravity and Earth rate only).
+    fn static_sample(c: &NavConfig, t: f64, dt: f64) -> ImuSample {
+        let lla = c.initial.lla.unwrap();
+        let AttitudeInit::Given(rpy) = c.initial.attitude else {
+            unreachable!()
+        };
+        let c_nb = c_bn_from_euler(&rpy).transpose();
+        let f_b = c_nb * Vector3::new(0.0, 0.0, -gravity_normal(lla.x, lla.z));
+        let w_b = c_nb * omega_ie_n(lla.x);
+        ImuSample {
+            t,
+            dt,
+            dtheta: w_b * dt,
+            dvel: f_b * dt,
+        }
+    }
+
+    fn final_state(c: &NavConfig, imu: &[ImuSample], fixes: &[GnssFix]) -> (NavState, Vec<f64>) {
+        let mut last = None;
+        let mut times = Vec::new();
+        run::<InitError>(
+            c,
+            imu.iter().map(|s| Ok(*s)),
+            fixes,
+            None,
+            |n| {
+                last = Some(*n.nav());
+                times.push(n.nav().t);
+                Ok(())
+            },
+            |_| {},
+        )
+        .unwrap();
+        (last.unwrap(), times)
+    }
+
+    /// A GNSS epoch inside an IMU interval splits it: the result equals feeding the
+    /// two halves as separate samples, and the update moves the state (it was applied).
+    #[test]
+    fn gnss_epoch_splits_the_imu_interval_exactly() {
+        let c = cfg();
+        let dt = 0.01;
+        let t_fix = 0.5037; // inside (0.50, 0.51]
+        let whole: Vec<ImuSample> = (0..=100)
+            .map(|k| static_sample(&c, k as f64 * dt, dt))
+            .collect();
+        let mut split = Vec::new();
+        for s in &whole {
+            if s.t > t_fix && s.t - s.dt < t_fix {
+                let a = t_fix - (s.t - s.dt);
+                split.push(static_sample(&c, t_fix, a));
+                split.push(static_sample(&c, s.t, s.dt - a));
+            } else {
+                split.push(*s);
+            }
+        }
+        // The fix is 1 m north of where the antenna really is.
+        let lla = c.initial.lla.unwrap();
+        let AttitudeInit::Given(rpy) = c.initial.attitude else {
+            unreachable!()
+        };
+        let ant = lla_add_ned(
+            &lla,
+            &(c_bn_from_euler(&rpy) * c.gnss.lever_arm_b + Vector3::new(1.0, 0.0, 0.0)),
+        );
+        let fixes = [GnssFix {
+            t: t_fix,
+            lla: ant,
+            std_ned: Vector3::repeat(0.1),
+            vel_ned: None,
+            vel_std_ned: None,
+        }];
+        let (a, ta) = final_state(&c, &whole, &fixes);
+        let (b, tb) = final_state(&c, &split, &fixes);
+        assert!(
+            crate::earth::lla_diff_ned(&a.lla, &b.lla).norm() < 1e-9,
+            "{:?} {:?}",
+            a.lla,
+            b.lla
+        );
+        assert!((a.v_n - b.v_n).norm() < 1e-12);
+        assert!(a.q_bn.angle_to(&b.q_bn) < 1e-12);
+        // Half of the 1 m offset is taken in (equal position std of state and fix).
+        let moved = crate::earth::lla_diff_ned(&a.lla, &lla);
+        assert!((moved.x - 0.5).abs() < 0.01, "{moved:?}");
+        // Output at every IMU epoch of the input (the split point is not an output).
+        assert_eq!(ta.len(), 100);
+        assert_eq!(tb.len(), 101);
+    }
+
+    /// With an output period, one output at the first epoch at or after each multiple.
+    #[test]
+    fn output_period_picks_one_epoch_per_period() {
+        let c = cfg();
+        let imu: Vec<ImuSample> = (0..=1000)
+            .map(|k| static_sample(&c, 100.0 + k as f64 * 0.005, 0.005))
+            .collect();
+        let mut times = Vec::new();
+        run::<InitError>(
+            &c,
+            imu.iter().map(|s| Ok(*s)),
+            &[],
+            Some(0.1),
+            |n| {
+                times.push(n.nav().t);
+                Ok(())
+            },
+            |_| {},
+        )
+        .unwrap();
+        assert_eq!(times.len(), 50);
+        assert!(
+            (times[0] - 100.1).abs() < 1e-9 && (times[49] - 105.0).abs() < 1e-9,
+            "{times:?}"
+        );
+    }
+
+    /// Fixes inside an outage window are withheld and counted; those at its ends are used.
+    #[test]
+    fn outage_windows_withhold_fixes() {
+        let mut c = cfg();
+        c.gnss.outages = OutageSchedule::parse("1:3").unwrap();
+        let imu: Vec<ImuSample> = (0..=500)
+            .map(|k| static_sample(&c, k as f64 * 0.01, 0.01))
+            .collect();
+        let lla = c.initial.lla.unwrap();
+        let AttitudeInit::Given(rpy) = c.initial.attitude else {
+            unreachable!()
+        };
+        let ant = lla_add_ned(&lla, &(c_bn_from_euler(&rpy) * c.gnss.lever_arm_b));
+        let fixes: Vec<GnssFix> = (1..=4)
+            .map(|k| GnssFix {
+                t: k as f64,
+                lla: ant,
+                std_ned: Vector3::repeat(0.1),
+                vel_ned: None,
+                vel_std_ned: None,
+            })
+            .collect();
+        let s = run::<InitError>(
+            &c,
+            imu.iter().map(|s| Ok(*s)),
+            &fixes,
+            None,
+            |_| Ok(()),
+            |_| {},
+        )
+        .unwrap();
+        assert_eq!((s.gnss_used, s.gnss_in_outage), (3, 1));
+    }
+}
