@@ -358,23 +358,38 @@ impl Navigator {
         }
     }
 
+    /// True while position, velocity and attitude are finite numbers.
+    pub fn nav_is_finite(&self) -> bool {
+        let n = &self.nav;
+        n.lla
+            .iter()
+            .chain(n.v_n.iter())
+            .chain(n.q_bn.coords.iter())
+            .all(|x| x.is_finite())
+    }
+
+    /// True while the covariance diagonal is finite.
+    pub fn covariance_is_finite(&self) -> bool {
+        (0..self.filter.dim()).all(|i| self.filter.p[(i, i)].is_finite())
+    }
+
     /// Roll, pitch, yaw [rad] of the current attitude.
     pub fn rpy(&self) -> Vector3<f64> {
         euler_from_q_bn(&self.nav.q_bn)
     }
 }
 
-/// Why a run could not start.
+/// Why a run could not start or had to stop (no initial pose, numerical failure).
 #[derive(Clone, Debug, PartialEq)]
-pub struct InitError(pub String);
+pub struct NavError(pub String);
 
-impl std::fmt::Display for InitError {
+impl std::fmt::Display for NavError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(&self.0)
     }
 }
 
-impl std::error::Error for InitError {}
+impl std::error::Error for NavError {}
 
 /// Initial position and attitude from the configuration, or found from the data
 /// (levelling window `window`, GNSS course, first GNSS fix). SYSTEM.md §1.
@@ -383,16 +398,16 @@ pub fn initial_pose(
     t0: f64,
     window: &[ImuSample],
     gnss: &[GnssFix],
-) -> Result<(Vector3<f64>, Vector3<f64>), InitError> {
+) -> Result<(Vector3<f64>, Vector3<f64>), NavError> {
     let rpy = match cfg.initial.attitude {
         AttitudeInit::Given(rpy) => rpy,
         AttitudeInit::LevelAndGnssCourse { min_speed_mps, .. } => {
             let (f_b, _) = alignment::mean_motion(window).ok_or_else(|| {
-                InitError("alignment: no IMU samples in the levelling window".into())
+                NavError("alignment: no IMU samples in the levelling window".into())
             })?;
             let (roll, pitch) = alignment::level(&f_b);
             let (_, yaw) = alignment::first_course(gnss, t0, min_speed_mps).ok_or_else(|| {
-                InitError(format!(
+                NavError(format!(
                     "alignment: no GNSS epoch after t = {t0:.3} with a horizontal speed of at least {min_speed_mps} m/s, so the initial yaw is unknown (give initial.attitude_deg)"
                 ))
             })?;
@@ -403,7 +418,7 @@ pub fn initial_pose(
         Some(lla) => lla,
         None => {
             let fix = gnss.iter().find(|f| f.t >= t0 - 0.5).ok_or_else(|| {
-                InitError(format!(
+                NavError(format!(
                     "no initial position given and no GNSS fix at or after t = {t0:.3}"
                 ))
             })?;
@@ -422,7 +437,7 @@ pub fn initial_pose(
 /// `cfg.start_time` fixes the initial epoch (its own interval is not integrated).
 /// With alignment, the samples of the levelling window are buffered, the initial
 /// attitude is computed, and the window is then navigated like any other data.
-pub fn run<E: From<InitError>>(
+pub fn run<E: From<NavError>>(
     cfg: &NavConfig,
     imu: impl Iterator<Item = Result<ImuSample, E>>,
     gnss: &[GnssFix],
@@ -509,6 +524,13 @@ pub fn run<E: From<InitError>>(
         }
         n.summary.imu_samples += 1;
         n.summary.last_t = s.t;
+        if !n.nav_is_finite() || (n.summary.imu_samples % 256 == 0 && !n.covariance_is_finite()) {
+            return Err(NavError(format!(
+                "the navigation state stopped being finite at t = {:.3} (check the IMU units and axes, the initial attitude and the noise settings); the output before this epoch was written",
+                s.t
+            ))
+            .into());
+        }
         let due = match period {
             None => true,
             Some(p) => ((s.t + 1e-6) / p).floor() > ((t_prev + 1e-6) / p).floor(),
@@ -605,7 +627,7 @@ mod tests {
     fn final_state(c: &NavConfig, imu: &[ImuSample], fixes: &[GnssFix]) -> (NavState, Vec<f64>) {
         let mut last = None;
         let mut times = Vec::new();
-        run::<InitError>(
+        run::<NavError>(
             c,
             imu.iter().map(|s| Ok(*s)),
             fixes,
@@ -675,6 +697,36 @@ mod tests {
         assert_eq!(tb.len(), 101);
     }
 
+    /// An IMU stream in the wrong units drives the state to infinity: the run stops with
+    /// an error naming the time instead of writing NaN.
+    #[test]
+    fn non_finite_state_stops_the_run() {
+        let c = cfg();
+        let imu: Vec<ImuSample> = (0..=2000)
+            .map(|k| {
+                let mut s = static_sample(&c, k as f64 * 0.01, 0.01);
+                s.dvel *= 1e150; // absurd units
+                s
+            })
+            .collect();
+        let mut outputs = 0;
+        let r = run::<NavError>(
+            &c,
+            imu.iter().map(|s| Ok(*s)),
+            &[],
+            None,
+            |n| {
+                assert!(n.nav_is_finite());
+                outputs += 1;
+                Ok(())
+            },
+            |_| {},
+        );
+        let e = r.expect_err("must stop");
+        assert!(e.0.contains("stopped being finite at t = "), "{e}");
+        assert!(outputs > 0 && outputs < 2000);
+    }
+
     /// With an output period, one output at the first epoch at or after each multiple.
     #[test]
     fn output_period_picks_one_epoch_per_period() {
@@ -683,7 +735,7 @@ mod tests {
             .map(|k| static_sample(&c, 100.0 + k as f64 * 0.005, 0.005))
             .collect();
         let mut times = Vec::new();
-        run::<InitError>(
+        run::<NavError>(
             &c,
             imu.iter().map(|s| Ok(*s)),
             &[],
@@ -724,7 +776,7 @@ mod tests {
                 vel_std_ned: None,
             })
             .collect();
-        let s = run::<InitError>(
+        let s = run::<NavError>(
             &c,
             imu.iter().map(|s| Ok(*s)),
             &fixes,
