@@ -90,7 +90,7 @@ impl JobResult {
             },
             "time_offset": self.time_offset.map(|f| serde_json::json!({
                 "offset_s_at_start": f.tau0,
-                "offset_sigma_s": f.tau0_sd,
+                "offset_sigma_s_at_end": f.tau0_sd,
                 "rate_ppm": f.rate * 1e6,
                 "rate_sigma_ppm": f.rate_sd * 1e6,
                 "t_start": f.t0,
@@ -204,6 +204,10 @@ pub fn run_job(mut cfg: RunConfig, out_dir: &Path, progress: bool) -> Result<Job
         }
     }
 
+    // Leftovers of an earlier run in the same directory must not sit beside this one's.
+    for stale in ["events.log", "summary.json"] {
+        let _ = std::fs::remove_file(out_dir.join(stale));
+    }
     std::fs::create_dir_all(out_dir)
         .with_context(|| format!("cannot create output directory {}", out_dir.display()))?;
     let mut files = vec![out_dir.join("solution.nav")];
@@ -341,14 +345,15 @@ pub fn run_job(mut cfg: RunConfig, out_dir: &Path, progress: bool) -> Result<Job
         .join()
         .map_err(|_| anyhow::anyhow!("the output writer panicked"))?;
     let report = reader.report().to_string();
+    // A failed writer (disk full, ...) is the real cause when the run stopped on it.
+    written.with_context(|| format!("writing the solution into {}", out_dir.display()))?;
+    sent?;
     let summary = result.with_context(|| {
         format!(
-            "run stopped; output up to the failure is in {}",
+            "run stopped; the output up to the failure is in {}",
             out_dir.display()
         )
     })?;
-    written?;
-    sent?;
     // Event log: rejected fixes and input findings.
     let ev_path = out_dir.join("events.log");
     let mut ev = std::fs::File::create(&ev_path)
@@ -367,7 +372,11 @@ pub fn run_job(mut cfg: RunConfig, out_dir: &Path, progress: bool) -> Result<Job
         for n in &input_notes {
             eprintln!("navfuse: note: {n}");
         }
-        let rej = summary.events.len();
+        let rej = summary
+            .events
+            .iter()
+            .filter(|e| matches!(e, navfuse_core::engine::Event::Rejected { .. }))
+            .count();
         if rej > 0 {
             eprintln!(
                 "navfuse: {rej} GNSS measurements rejected by the innovation gate (see events.log)"

@@ -92,6 +92,8 @@ pub struct Navigator {
     time_offset_rate: f64,
     acc: Accum,
     w_ib_b: Vector3<f64>,
+    /// Acceleration d(v^n)/dt over the last IMU interval [m/s²].
+    a_n: Vector3<f64>,
     gate3: Option<f64>,
     /// Time of the first of the current run of gate-rejected fixes.
     reject_streak_since: Option<f64>,
@@ -154,6 +156,7 @@ impl Navigator {
             time_offset_rate,
             acc: Accum::default(),
             w_ib_b: Vector3::zeros(),
+            a_n: Vector3::zeros(),
             gate3,
             reject_streak_since: None,
             summary: RunSummary {
@@ -210,11 +213,15 @@ impl Navigator {
     /// Advance over one raw IMU interval.
     pub fn propagate(&mut self, raw: &ImuSample) {
         let s = self.imu_errors.compensate(raw);
-        self.time_offset_s += self.time_offset_rate * s.dt;
+        // The offset line tau0 + rate (t - t0) follows elapsed time (after an IMU gap
+        // the interval's dt is shorter than the time that passed).
+        self.time_offset_s += self.time_offset_rate * (raw.t - self.nav.t);
+        let v_before = self.nav.v_n;
         let (next, info) = self.mech.step(&self.nav, &s);
         self.nav = next;
         if s.dt > 0.0 {
             self.w_ib_b = s.dtheta / s.dt;
+            self.a_n = (self.nav.v_n - v_before) / s.dt;
         }
         self.acc.dt += s.dt;
         self.acc.dv_f_n += info.dv_f_n;
@@ -263,6 +270,7 @@ impl Navigator {
             nav: &self.nav,
             layout: &self.layout,
             w_ib_b: self.w_ib_b,
+            a_n: self.a_n,
             lever_arm_b: self.cfg.gnss.lever_arm_b,
         };
         let Some(lin) = aiding.linearize(&ctx) else {
@@ -284,7 +292,7 @@ impl Navigator {
             }
             UpdateOutcome::Singular => {
                 self.summary.events.push(Event::Singular {
-                    t: self.nav.t,
+                    t: self.time_gnss(),
                     source: aiding.name(),
                 });
                 false
@@ -336,7 +344,7 @@ impl Navigator {
         }
         let use_vel = g.use_velocity;
         let mut gate = self.gate3;
-        if let Some(t0) = self.reject_streak_since {
+        if let (Some(t0), Some(_)) = (self.reject_streak_since, gate) {
             if fix.t - t0 >= g.gate_timeout_s {
                 gate = None;
                 self.summary.events.push(Event::GateBypassed {
@@ -345,13 +353,19 @@ impl Navigator {
                 });
             }
         }
+        let n_events = self.summary.events.len();
         let used = self.fuse(Aiding::GnssPosition(&f), gate);
         if used {
             self.summary.gnss_used += 1;
             self.reject_streak_since = None;
         } else {
             self.summary.gnss_rejected += 1;
-            self.reject_streak_since.get_or_insert(fix.t);
+            let gated = self.summary.events[n_events..]
+                .iter()
+                .any(|e| matches!(e, Event::Rejected { .. }));
+            if gated {
+                self.reject_streak_since.get_or_insert(fix.t);
+            }
         }
         if use_vel && f.vel_ned.is_some() {
             self.fuse(Aiding::GnssVelocity(&f), gate);
@@ -393,16 +407,22 @@ impl std::error::Error for NavError {}
 
 /// Initial position and attitude from the configuration, or found from the data
 /// (levelling window `window`, GNSS course, first GNSS fix). SYSTEM.md §1.
+/// Also returns the time of the GNSS fix used as the initial position, if any (that
+/// fix is then not used again as a measurement).
 pub fn initial_pose(
     cfg: &NavConfig,
     t0: f64,
     window: &[ImuSample],
     gnss: &[GnssFix],
-) -> Result<(Vector3<f64>, Vector3<f64>), NavError> {
+) -> Result<(Vector3<f64>, Vector3<f64>, Option<f64>), NavError> {
     let rpy = match cfg.initial.attitude {
         AttitudeInit::Given(rpy) => rpy,
         AttitudeInit::LevelAndGnssCourse { min_speed_mps, .. } => {
-            let (f_b, _) = alignment::mean_motion(window).ok_or_else(|| {
+            let compensated: Vec<ImuSample> = window
+                .iter()
+                .map(|s| cfg.initial.imu_errors.compensate(s))
+                .collect();
+            let (f_b, _) = alignment::mean_motion(&compensated).ok_or_else(|| {
                 NavError("alignment: no IMU samples in the levelling window".into())
             })?;
             let (roll, pitch) = alignment::level(&f_b);
@@ -414,6 +434,7 @@ pub fn initial_pose(
             Vector3::new(roll, pitch, yaw)
         }
     };
+    let mut fix_used = None;
     let lla = match cfg.initial.lla {
         Some(lla) => lla,
         None => {
@@ -423,10 +444,11 @@ pub fn initial_pose(
                 ))
             })?;
             let l_n = c_bn_from_euler(&rpy) * cfg.gnss.lever_arm_b;
+            fix_used = Some(fix.t);
             lla_add_ned(&fix.lla, &(-l_n))
         }
     };
-    Ok((lla, rpy))
+    Ok((lla, rpy, fix_used))
 }
 
 /// Run the navigator over an IMU stream and a time-sorted list of GNSS fixes.
@@ -464,15 +486,18 @@ pub fn run<E: From<NavError>>(
             }
         }
     }
-    let (lla0, rpy0) = initial_pose(cfg, t0, &window[..window.len().saturating_sub(1)], gnss)?;
+    let (lla0, rpy0, fix_used) =
+        initial_pose(cfg, t0, &window[..window.len().saturating_sub(1)], gnss)?;
     let mut n = Navigator::new(cfg, t0, lla0, rpy0);
     let mut gi = 0usize;
     // Fixes up to the initial epoch are not used.
-    while gi < gnss.len() && gnss[gi].t + n.time_offset() <= t0 {
+    while gi < gnss.len()
+        && (gnss[gi].t + n.time_offset() <= t0 || fix_used.is_some_and(|t| gnss[gi].t <= t))
+    {
         gi += 1;
     }
     n.summary.gnss_before_start = gi;
-    let mut t_prev = t0;
+    let mut t_prev = t0 - n.time_offset();
     let period = output_period_s.filter(|p| *p > 0.0);
     for item in window.into_iter().map(Ok).chain(imu) {
         let s = item?;
@@ -531,9 +556,11 @@ pub fn run<E: From<NavError>>(
             ))
             .into());
         }
+        // Cadence on the time scale the records carry (GNSS time).
+        let t_out = n.time_gnss();
         let due = match period {
             None => true,
-            Some(p) => ((s.t + 1e-6) / p).floor() > ((t_prev + 1e-6) / p).floor(),
+            Some(p) => ((t_out + 1e-6) / p).floor() > ((t_prev + 1e-6) / p).floor(),
         };
         if due {
             n.summary.outputs += 1;
@@ -542,7 +569,7 @@ pub fn run<E: From<NavError>>(
         if n.summary.imu_samples % 8192 == 0 {
             on_progress(s.t);
         }
-        t_prev = s.t;
+        t_prev = t_out;
     }
     if let Some(i) = n.layout.index(Block::TimeOffset) {
         n.summary.time_offset = Some((n.time_offset_s, n.filter.std(i)));

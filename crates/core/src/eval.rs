@@ -122,7 +122,10 @@ fn interpolate(a: &TrajPoint, b: &TrajPoint, t: f64) -> TrajPoint {
     } else {
         0.0
     };
-    let lla = a.lla + (b.lla - a.lla) * k;
+    let mut d = b.lla - a.lla;
+    d.y = wrap_pi(d.y); // across the antimeridian
+    let mut lla = a.lla + d * k;
+    lla.y = wrap_pi(lla.y);
     let v_n = match (a.v_n, b.v_n) {
         (Some(x), Some(y)) => Some(x + (y - x) * k),
         _ => None,

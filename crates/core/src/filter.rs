@@ -123,19 +123,22 @@ fn matmul(dst: &mut DMatrix<f64>, lhs: &DMatrix<f64>, rhs: &DMatrix<f64>, rhs_t:
 /// of freedom (Wilson-Hilferty approximation refined by Newton steps on the exact
 /// CDF for dof <= 6; accurate to better than 0.1 % for p in [1e-9, 0.5]).
 pub fn chi2_threshold(dof: usize, p: f64) -> f64 {
+    let p = p.clamp(1e-300, 0.5);
     let k = dof as f64;
     let z = normal_upper_quantile(p);
     let a = 2.0 / (9.0 * k);
     let mut x = k * (1.0 - a + z * a.sqrt()).powi(3);
     if dof <= 6 {
-        for _ in 0..30 {
-            let f = chi2_upper_tail(dof, x) - p;
+        // Newton on ln(tail): d ln(tail)/dx = -pdf / tail; nearly linear in the
+        // tail, so it converges from the Wilson-Hilferty start; steps are bounded.
+        for _ in 0..50 {
+            let tail = chi2_upper_tail(dof, x);
             let pdf = chi2_pdf(dof, x);
-            if pdf <= 0.0 {
+            if !(tail > 0.0 && pdf > 0.0) {
                 break;
             }
-            let step = f / pdf;
-            x = (x + step).max(1e-12);
+            let step = ((tail.ln() - p.ln()) * tail / pdf).clamp(-0.5 * x, x);
+            x += step;
             if step.abs() < 1e-12 * x {
                 break;
             }
@@ -210,9 +213,10 @@ fn erfc(x: f64) -> f64 {
     }
 }
 
-/// Upper-tail standard normal quantile (Acklam's rational approximation).
+/// Upper-tail standard normal quantile: z with P(Z > z) = p, for p in (0, 0.5],
+/// as minus the lower quantile of p (Acklam's rational approximation), which keeps
+/// full accuracy for tiny p.
 fn normal_upper_quantile(p: f64) -> f64 {
-    let q = 1.0 - p.clamp(1e-300, 1.0 - 1e-16);
     const A: [f64; 6] = [
         -3.969683028665376e1,
         2.209460984245205e2,
@@ -242,21 +246,18 @@ fn normal_upper_quantile(p: f64) -> f64 {
         2.445134137142996,
         3.754408661907416,
     ];
-    let plow = 0.02425;
-    if q < plow {
-        let r = (-2.0 * q.ln()).sqrt();
+    let p = p.clamp(1e-300, 0.5);
+    let lower = if p < 0.02425 {
+        let r = (-2.0 * p.ln()).sqrt();
         (((((C[0] * r + C[1]) * r + C[2]) * r + C[3]) * r + C[4]) * r + C[5])
             / ((((D[0] * r + D[1]) * r + D[2]) * r + D[3]) * r + 1.0)
-    } else if q <= 1.0 - plow {
-        let r = q - 0.5;
+    } else {
+        let r = p - 0.5;
         let s = r * r;
         (((((A[0] * s + A[1]) * s + A[2]) * s + A[3]) * s + A[4]) * s + A[5]) * r
             / (((((B[0] * s + B[1]) * s + B[2]) * s + B[3]) * s + B[4]) * s + 1.0)
-    } else {
-        let r = (-2.0 * (1.0 - q).ln()).sqrt();
-        -(((((C[0] * r + C[1]) * r + C[2]) * r + C[3]) * r + C[4]) * r + C[5])
-            / ((((D[0] * r + D[1]) * r + D[2]) * r + D[3]) * r + 1.0)
-    }
+    };
+    -lower
 }
 
 #[cfg(test)]
@@ -270,6 +271,9 @@ mod tests {
         assert!((chi2_threshold(3, 0.05) - 7.815).abs() < 0.005);
         assert!((chi2_threshold(1, 0.01) - 6.635).abs() < 0.005);
         assert!((chi2_threshold(6, 1e-3) - 22.458).abs() < 0.01);
+        // Tiny probabilities stay finite and large (no silent switch-off).
+        let t = chi2_threshold(3, 1e-20);
+        assert!(t.is_finite() && t > 70.0 && t < 200.0, "{t}");
     }
 
     #[test]

@@ -130,7 +130,10 @@ impl Mechanizer {
         let v_avg = 0.5 * (nav.v_n + v_new);
         let h_new = nav.lla.z - v_avg.z * dt;
         let lat_new = nav.lla.x + v_avg.x * k_m * dt;
-        let lon_new = nav.lla.y + v_avg.y * k_n / cl * dt;
+        let mut lon_new = nav.lla.y + v_avg.y * k_n / cl * dt;
+        if lon_new.abs() > std::f64::consts::PI {
+            lon_new = crate::attitude::wrap_pi(lon_new);
+        }
 
         // Attitude: body rotation with coning correction, n-frame rotation at mid-interval.
         let phi_b = dth + dth_prev.cross(&dth) / 12.0;

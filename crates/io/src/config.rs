@@ -1243,11 +1243,11 @@ fn convert_gnss(
         .transpose()?;
     let gate_probability = match g.gate_probability {
         None => None,
-        Some(p) if p.is_finite() && p > 0.0 && p < 0.5 => Some(p),
+        Some(p) if p.is_finite() && p >= 1e-15 && p < 0.5 => Some(p),
         Some(p) => {
             return Err(kerr(
                 "gnss.gate_probability",
-                format!("expected a probability in (0, 0.5), e.g. 1e-4, got {p}"),
+                format!("expected a probability in [1e-15, 0.5), e.g. 1e-4, got {p}"),
             ))
         }
     };

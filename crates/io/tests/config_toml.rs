@@ -565,7 +565,7 @@ fn range_errors_name_key_and_expectation() {
         ("[time]\nstart = 10\nend = 5", "time.end", "after"),
         ("[filter]\ncovariance_period_s = -1", "filter.covariance_period_s", ">= 0"),
         ("[filter]\ntime_offset = { std_s = 0 }", "filter.time_offset.std_s", "> 0"),
-        ("[gnss]\nfile = \"g\"\nformat = \"kf-gins\"\ngate_probability = 0.7", "gnss.gate_probability", "(0, 0.5)"),
+        ("[gnss]\nfile = \"g\"\nformat = \"kf-gins\"\ngate_probability = 0.7", "gnss.gate_probability", "[1e-15, 0.5)"),
         ("[gnss]\nfile = \"g\"\nformat = \"kf-gins\"\nquality = [1]", "gnss.quality", "rtklib-pos"),
         ("[gnss]\nfile = \"g\"\nformat = \"rtklib-pos\"\nquality = []", "gnss.quality", "non-empty"),
         ("[gnss]\nfile = \"g\"\nformat = \"rtklib-pos\"\nquality = [9]", "gnss.quality", "1..=6"),

@@ -3,12 +3,13 @@
 //!   v_ant = v^n + C_b^n (w_ib^b x l^b) - w_in^n x (C_b^n l^b)
 //!   y = v_ant,INS - v_GNSS ~ dv + ([C (w x l)] x - [w_in x][C l x]) phi
 //!                            - C [l x] (b_g + diag(w) s_g)
+//!                            + a^n dtau   (time-offset state, if present)
 //!   R = diag(vel_std²)
 
 use super::{AidingContext, Linearized};
 use crate::attitude::skew;
 use crate::earth::{omega_en_n, omega_ie_n};
-use crate::state::{ATT, BG, SG, VEL};
+use crate::state::{Block, ATT, BG, SG, VEL};
 use crate::types::GnssFix;
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
@@ -37,6 +38,10 @@ pub fn linearize(ctx: &AidingContext, fix: &GnssFix) -> Option<Linearized> {
     h.view_mut((0, BG), (3, 3)).copy_from(&c_lx);
     h.view_mut((0, SG), (3, 3))
         .copy_from(&(c_lx * Matrix3::from_diagonal(&ctx.w_ib_b)));
+    if let Some(i) = ctx.layout.index(Block::TimeOffset) {
+        // A fix applied dtau too late sees the velocity of dtau later: + a^n dtau.
+        h.view_mut((0, i), (3, 1)).copy_from(&ctx.a_n);
+    }
     let r = DMatrix::from_diagonal(&DVector::from_iterator(3, std.iter().map(|s| s * s)));
     Some(Linearized {
         y: DVector::from_column_slice(y3.as_slice()),

@@ -15,6 +15,8 @@ pub struct AidingContext<'a> {
     pub layout: &'a StateLayout,
     /// Compensated angular rate w_ib^b over the last IMU interval [rad/s].
     pub w_ib_b: Vector3<f64>,
+    /// Acceleration d(v^n)/dt over the last IMU interval [m/s²].
+    pub a_n: Vector3<f64>,
     /// Antenna lever arm in the body frame [m].
     pub lever_arm_b: Vector3<f64>,
 }
