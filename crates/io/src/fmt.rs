@@ -287,6 +287,15 @@ pub fn parse_i64(s: &[u8]) -> Option<i64> {
     Some(if neg { -v } else { v })
 }
 
+/// True for lines every text reader skips: blank, or starting with `#` or `%`.
+#[inline]
+pub fn is_comment_line(line: &[u8], fields: &[(usize, usize)]) -> bool {
+    match fields.first() {
+        None => true,
+        Some(&(s, _)) => matches!(line.get(s), Some(b'#') | Some(b'%')),
+    }
+}
+
 /// Append `v` with exactly 9 decimals, byte for byte as `format!("{:.9}", v)`.
 ///
 /// Fast path for |v| < 4e6: |v| = m 2^e exactly, so |v| 1e9 = m 1e9 / 2^-e is rounded

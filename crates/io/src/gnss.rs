@@ -6,7 +6,7 @@
 //! (.pos only) and decimated. See docs/FORMATS.md.
 
 use crate::error::InputError;
-use crate::fmt::{field, parse_f64, split_fields, LineReader};
+use crate::fmt::{field, is_comment_line, parse_f64, split_fields, LineReader};
 use crate::input::{GnssFormat, GnssSource};
 use crate::time::{calendar_to_week_sow, Calendar, SECONDS_PER_WEEK};
 use nalgebra::Vector3;
@@ -176,10 +176,8 @@ fn read_kfgins(path: &Path, offset: f64) -> Result<Vec<Epoch>, InputError> {
     let mut prev: Option<f64> = None;
     while let Some((ln, text)) = lines.next_line()? {
         split_fields(text, &mut fields);
-        match fields.first() {
-            None => continue,
-            Some(&(s, _)) if matches!(text.get(s), Some(b'#') | Some(b'%')) => continue,
-            _ => {}
+        if is_comment_line(text, &fields) {
+            continue;
         }
         let l = Line {
             path,

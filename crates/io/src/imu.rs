@@ -19,7 +19,9 @@
 //!   v_sensor with `sensor_to_body_rpy_deg`.
 
 use crate::error::InputError;
-use crate::fmt::{field, parse_f64, parse_first_n, parse_i64, split_fields, LineReader};
+use crate::fmt::{
+    field, is_comment_line, parse_f64, parse_first_n, parse_i64, split_fields, LineReader,
+};
 use crate::input::{
     AccelUnit, CsvImuOptions, GyroUnit, ImuFormat, ImuQuantity, ImuSource, RateSampling, TimeScale,
     TimeUnit,
@@ -438,15 +440,6 @@ fn num(
     }
 }
 
-/// True for lines to skip in every text format: blank, or starting with `#` or `%`.
-#[inline]
-fn is_comment(line: &[u8], fields: &[(usize, usize)]) -> bool {
-    match fields.first() {
-        None => true,
-        Some(&(s, _)) => matches!(line.get(s), Some(b'#') | Some(b'%')),
-    }
-}
-
 fn vec3(
     path: &Path,
     ln: usize,
@@ -480,7 +473,7 @@ fn parse_kfgins(
         )));
     }
     split_fields(line, fields);
-    if is_comment(line, fields) {
+    if is_comment_line(line, fields) {
         return Ok(None);
     }
     if fields.len() < 7 {
@@ -571,7 +564,7 @@ fn csv_time_base(
             continue;
         }
         split_fields(line, &mut fields);
-        if is_comment(line, &fields) {
+        if is_comment_line(line, &fields) {
             continue;
         }
         if fields.len() < k.min_cols {
@@ -621,7 +614,7 @@ fn parse_csv(
         return Ok(None);
     }
     split_fields(line, fields);
-    if is_comment(line, fields) {
+    if is_comment_line(line, fields) {
         return Ok(None);
     }
     if fields.len() < k.min_cols {

@@ -5,7 +5,9 @@
 //! 15 characters, then one space), lines ending in `\n`. See docs/FORMATS.md.
 
 use crate::error::InputError;
-use crate::fmt::{field, parse_f64, push_fixed9, push_kf_field, split_fields, LineReader};
+use crate::fmt::{
+    field, is_comment_line, parse_f64, push_fixed9, push_kf_field, split_fields, LineReader,
+};
 use nalgebra::Vector3;
 use navfuse_core::attitude::{euler_from_q_bn, q_bn_from_euler, wrap_2pi};
 use navfuse_core::{ImuErrors, NavState};
@@ -320,10 +322,8 @@ pub fn read_nav(path: &Path) -> Result<Vec<(u32, NavState)>, InputError> {
     let mut prev: Option<f64> = None;
     while let Some((ln, text)) = lines.next_line()? {
         split_fields(text, &mut fields);
-        match fields.first() {
-            None => continue,
-            Some(&(s, _)) if matches!(text.get(s), Some(b'#') | Some(b'%')) => continue,
-            _ => {}
+        if is_comment_line(text, &fields) {
+            continue;
         }
         if fields.len() != 11 {
             return Err(InputError::columns(
