@@ -8,6 +8,8 @@ pub mod gnss;
 pub mod imu;
 pub mod input;
 pub mod nav;
+pub mod rinex_nav;
+pub mod rinex_obs;
 pub mod time;
 pub mod timetag;
 

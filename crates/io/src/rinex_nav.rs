@@ -1,0 +1,666 @@
+//! RINEX navigation files: GPS broadcast ephemerides.
+//!
+//! Reads RINEX 2.10/2.11 GPS navigation files (type `N`) and RINEX 3.0x navigation
+//! files (GPS-only or mixed). GPS records (RINEX 3.04 Table A6, 2.11 Table A4) are
+//! kept; records of other systems are counted and skipped by their record size
+//! (RINEX 3.04 §4.x: GLONASS and SBAS 4 lines, Galileo/BeiDou/QZSS/IRNSS 8 lines).
+//! Header: ION ALPHA / ION BETA (v2), IONOSPHERIC CORR GPSA/GPSB (v3), LEAP SECONDS.
+//! Numbers may use `D` or `E` exponents. RINEX 4 is refused with a clear error.
+//! Writes RINEX 3.04 GPS navigation files (fixed-width D19.12 fields).
+
+use crate::error::InputError;
+use crate::fmt::LineReader;
+use navfuse_gnss::time::{GpstCalendar, HALF_WEEK_S, SECONDS_PER_WEEK};
+use navfuse_gnss::{GpsEphemeris, GpsTime};
+use std::io::{self, Write};
+use std::path::Path;
+
+/// What a RINEX navigation file gave.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct RinexNav {
+    /// GPS ephemerides, in file order.
+    pub gps: Vec<GpsEphemeris>,
+    /// Klobuchar alpha0-3 [s, s/sc, s/sc^2, s/sc^3].
+    pub iono_alpha: Option<[f64; 4]>,
+    /// Klobuchar beta0-3 [s, s/sc, s/sc^2, s/sc^3].
+    pub iono_beta: Option<[f64; 4]>,
+    /// GPS-UTC leap seconds from the header.
+    pub leap_seconds: Option<i32>,
+    /// Records of other systems that were skipped.
+    pub skipped_records: usize,
+}
+
+/// Header label columns (RINEX 3.04 §5.1: label in columns 61-80).
+const LABEL_COL: usize = 60;
+
+/// "Transmission time unknown" value (RINEX 3.04 Table A6 note: 0.9999e9).
+const TT_UNKNOWN: f64 = 0.9999e9;
+
+/// Names of the 28 broadcast-orbit fields, 4 per line (RINEX 3.04 Table A6).
+const ORBIT_FIELDS: [&str; 28] = [
+    "IODE",
+    "Crs",
+    "Delta n",
+    "M0",
+    "Cuc",
+    "e",
+    "Cus",
+    "sqrt(A)",
+    "Toe",
+    "Cic",
+    "OMEGA0",
+    "Cis",
+    "i0",
+    "Crc",
+    "omega",
+    "OMEGA DOT",
+    "IDOT",
+    "Codes on L2",
+    "GPS Week",
+    "L2 P flag",
+    "SV accuracy",
+    "SV health",
+    "TGD",
+    "IODC",
+    "Transmission time",
+    "Fit interval",
+    "spare",
+    "spare",
+];
+
+/// The text of columns [a, b) of a line (clamped to its length).
+fn cols(line: &[u8], a: usize, b: usize) -> &[u8] {
+    let b = b.min(line.len());
+    if a >= b {
+        &[]
+    } else {
+        line.get(a..b).unwrap_or(&[])
+    }
+}
+
+fn trim(s: &[u8]) -> &[u8] {
+    let start = s
+        .iter()
+        .position(|b| !b.is_ascii_whitespace())
+        .unwrap_or(s.len());
+    let end = s
+        .iter()
+        .rposition(|b| !b.is_ascii_whitespace())
+        .map_or(start, |e| e + 1);
+    s.get(start..end).unwrap_or(&[])
+}
+
+/// Parse a Fortran number (`D`/`d` exponents allowed); Ok(None) for a blank field.
+fn parse_num(path: &Path, ln: usize, name: &str, text: &[u8]) -> Result<Option<f64>, InputError> {
+    let t = trim(text);
+    if t.is_empty() {
+        return Ok(None);
+    }
+    let s: String = t
+        .iter()
+        .map(|&b| {
+            if b == b'D' || b == b'd' {
+                'E'
+            } else {
+                b as char
+            }
+        })
+        .collect();
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(Some(v)),
+        Ok(v) => Err(InputError::not_finite(path, ln, name, v)),
+        Err(_) => Err(InputError::not_a_number(path, ln, name, t)),
+    }
+}
+
+fn required(path: &Path, ln: usize, name: &str, text: &[u8]) -> Result<f64, InputError> {
+    parse_num(path, ln, name, text)?.ok_or_else(|| {
+        InputError::at_field(path, ln, name, "expected a number, found a blank field")
+    })
+}
+
+fn int_in(
+    path: &Path,
+    ln: usize,
+    name: &str,
+    text: &[u8],
+    lo: i64,
+    hi: i64,
+) -> Result<i64, InputError> {
+    let t = trim(text);
+    let v = std::str::from_utf8(t)
+        .ok()
+        .and_then(|s| s.parse::<i64>().ok());
+    match v {
+        Some(v) if (lo..=hi).contains(&v) => Ok(v),
+        Some(v) => Err(InputError::at_field(
+            path,
+            ln,
+            name,
+            format!("expected {lo}..{hi}, found {v}"),
+        )),
+        None => Err(InputError::at_field(
+            path,
+            ln,
+            name,
+            format!(
+                "expected an integer, found \"{}\"",
+                String::from_utf8_lossy(t)
+            ),
+        )),
+    }
+}
+
+/// A float field that must hold a whole number in lo..=hi.
+fn whole_in(
+    path: &Path,
+    ln: usize,
+    name: &str,
+    v: f64,
+    lo: f64,
+    hi: f64,
+) -> Result<f64, InputError> {
+    if v.fract() != 0.0 || v < lo || v > hi {
+        return Err(InputError::at_field(
+            path,
+            ln,
+            name,
+            format!("expected a whole number in {lo}..{hi}, found {v}"),
+        ));
+    }
+    Ok(v)
+}
+
+fn header_label(line: &[u8]) -> &[u8] {
+    trim(cols(line, LABEL_COL, 80))
+}
+
+/// Read a RINEX 2.10/2.11 or 3.0x navigation file; see the module documentation.
+pub fn read_rinex_nav(path: &Path) -> Result<RinexNav, InputError> {
+    let mut rd = LineReader::open(path)?;
+    let mut nav = RinexNav::default();
+    // Header.
+    let (ln, first) = match rd.next_line()? {
+        Some((ln, l)) => (ln, l.to_vec()),
+        None => return Err(InputError::new(path, "empty file: expected a RINEX header")),
+    };
+    if header_label(&first) != b"RINEX VERSION / TYPE" {
+        return Err(InputError::at_line(
+            path,
+            ln,
+            "expected 'RINEX VERSION / TYPE' in columns 61-80 of the first line",
+        ));
+    }
+    let version = required(path, ln, "RINEX version", cols(&first, 0, 9))?;
+    let type_char = cols(&first, 20, 21).first().copied().unwrap_or(b' ');
+    let major = version.floor() as i64;
+    match major {
+        2 if type_char == b'N' => {}
+        2 => {
+            return Err(InputError::at_field(
+                path,
+                ln,
+                "file type",
+                format!(
+                    "expected a GPS navigation file (type N), found type '{}'",
+                    type_char as char
+                ),
+            ))
+        }
+        3 if type_char == b'N' => {}
+        3 => {
+            return Err(InputError::at_field(
+                path,
+                ln,
+                "file type",
+                format!(
+                    "expected a navigation file (type N), found '{}'",
+                    type_char as char
+                ),
+            ))
+        }
+        _ => {
+            return Err(InputError::at_field(
+                path,
+                ln,
+                "RINEX version",
+                format!("version {version} is not supported (2.10, 2.11 and 3.0x are)"),
+            ))
+        }
+    }
+    let v3 = major == 3;
+    loop {
+        let (ln, line) = match rd.next_line()? {
+            Some(x) => x,
+            None => return Err(InputError::new(path, "no 'END OF HEADER' line")),
+        };
+        let label = header_label(line);
+        match label {
+            b"END OF HEADER" => break,
+            b"ION ALPHA" | b"ION BETA" => {
+                let mut c = [0.0; 4];
+                for (k, v) in c.iter_mut().enumerate() {
+                    *v = required(
+                        path,
+                        ln,
+                        "ION ALPHA/BETA",
+                        cols(line, 2 + 12 * k, 14 + 12 * k),
+                    )?;
+                }
+                if label == b"ION ALPHA" {
+                    nav.iono_alpha = Some(c);
+                } else {
+                    nav.iono_beta = Some(c);
+                }
+            }
+            b"IONOSPHERIC CORR" => {
+                let kind = cols(line, 0, 4);
+                if kind == b"GPSA" || kind == b"GPSB" {
+                    let mut c = [0.0; 4];
+                    for (k, v) in c.iter_mut().enumerate() {
+                        *v = required(
+                            path,
+                            ln,
+                            "IONOSPHERIC CORR",
+                            cols(line, 5 + 12 * k, 17 + 12 * k),
+                        )?;
+                    }
+                    if kind == b"GPSA" {
+                        nav.iono_alpha = Some(c);
+                    } else {
+                        nav.iono_beta = Some(c);
+                    }
+                }
+            }
+            b"LEAP SECONDS" => {
+                nav.leap_seconds =
+                    Some(int_in(path, ln, "LEAP SECONDS", cols(line, 0, 6), -100, 1000)? as i32);
+            }
+            _ => {}
+        }
+    }
+    // Records.
+    while let Some((ln, l)) = rd.next_line()? {
+        let line = l.to_vec();
+        if trim(&line).is_empty() {
+            continue;
+        }
+        if v3 {
+            let sys = line.first().copied().unwrap_or(b' ');
+            let lines = match sys {
+                b'G' => 8,
+                b'R' | b'S' => 4,
+                b'E' | b'C' | b'J' | b'I' => 8,
+                _ => {
+                    return Err(InputError::at_field(
+                        path,
+                        ln,
+                        "satellite system",
+                        format!(
+                            "expected G, R, E, C, J, I or S in column 1, found \"{}\"",
+                            crate::error::shorten(cols(&line, 0, 3))
+                        ),
+                    ))
+                }
+            };
+            if sys != b'G' {
+                for _ in 1..lines {
+                    if rd.next_line()?.is_none() {
+                        return Err(InputError::at_line(
+                            path,
+                            ln,
+                            format!(
+                                "record truncated: a '{}' record has {lines} lines",
+                                sys as char
+                            ),
+                        ));
+                    }
+                }
+                nav.skipped_records += 1;
+                continue;
+            }
+        }
+        let eph = read_gps_record(&mut rd, path, ln, &line, v3)?;
+        nav.gps.push(eph);
+    }
+    Ok(nav)
+}
+
+/// Parse one GPS record whose first line (number `ln`) has been read.
+fn read_gps_record(
+    rd: &mut LineReader,
+    path: &Path,
+    ln: usize,
+    line: &[u8],
+    v3: bool,
+) -> Result<GpsEphemeris, InputError> {
+    // First line: PRN, toc, af0, af1, af2 (3.04 Table A6; 2.11 Table A4).
+    let (prn, cal, clk0) = if v3 {
+        let prn = int_in(path, ln, "PRN", cols(line, 1, 3), 1, 63)?;
+        let year = int_in(path, ln, "toc year", cols(line, 4, 8), 1980, 2200)?;
+        let cal = (
+            year,
+            int_in(path, ln, "toc month", cols(line, 9, 11), 1, 12)?,
+            int_in(path, ln, "toc day", cols(line, 12, 14), 1, 31)?,
+            int_in(path, ln, "toc hour", cols(line, 15, 17), 0, 23)?,
+            int_in(path, ln, "toc minute", cols(line, 18, 20), 0, 59)?,
+            int_in(path, ln, "toc second", cols(line, 21, 23), 0, 60)? as f64,
+        );
+        (prn, cal, 23)
+    } else {
+        let prn = int_in(path, ln, "PRN", cols(line, 0, 2), 1, 63)?;
+        let yy = int_in(path, ln, "toc year", cols(line, 3, 5), 0, 99)?;
+        let year = if yy < 80 { 2000 + yy } else { 1900 + yy };
+        let sec = required(path, ln, "toc second", cols(line, 17, 22))?;
+        let cal = (
+            year,
+            int_in(path, ln, "toc month", cols(line, 6, 8), 1, 12)?,
+            int_in(path, ln, "toc day", cols(line, 9, 11), 1, 31)?,
+            int_in(path, ln, "toc hour", cols(line, 12, 14), 0, 23)?,
+            int_in(path, ln, "toc minute", cols(line, 15, 17), 0, 59)?,
+            sec,
+        );
+        (prn, cal, 22)
+    };
+    let toc = GpsTime::from_calendar(&GpstCalendar {
+        year: cal.0 as i32,
+        month: cal.1 as u32,
+        day: cal.2 as u32,
+        hour: cal.3 as u32,
+        minute: cal.4 as u32,
+        second: cal.5,
+    })
+    .ok_or_else(|| InputError::at_field(path, ln, "toc", "invalid calendar date or time"))?;
+    let af0 = required(path, ln, "af0", cols(line, clk0, clk0 + 19))?;
+    let af1 = required(path, ln, "af1", cols(line, clk0 + 19, clk0 + 38))?;
+    let af2 = required(path, ln, "af2", cols(line, clk0 + 38, clk0 + 57))?;
+    // Seven broadcast-orbit lines of four fields.
+    let off = if v3 { 4 } else { 3 };
+    let mut f = [0.0f64; 28];
+    let mut present = [false; 28];
+    let mut lines = [0usize; 7];
+    for (k, line_no) in lines.iter_mut().enumerate() {
+        let (n, l) = match rd.next_line()? {
+            Some(x) => x,
+            None => {
+                return Err(InputError::at_line(
+                    path,
+                    ln,
+                    format!("GPS record truncated: expected 8 lines, found {}", k + 1),
+                ))
+            }
+        };
+        *line_no = n;
+        for j in 0..4 {
+            let idx = 4 * k + j;
+            let name = ORBIT_FIELDS[idx];
+            let text = cols(l, off + 19 * j, off + 19 * (j + 1));
+            if let Some(v) = parse_num(path, n, name, text)? {
+                f[idx] = v;
+                present[idx] = true;
+            }
+        }
+    }
+    // Lines 1-5 (except codes on L2 and L2 P flag) are required.
+    for idx in 0..20 {
+        if !present[idx] && idx != 17 && idx != 19 {
+            return Err(InputError::at_field(
+                path,
+                lines[idx / 4],
+                ORBIT_FIELDS[idx],
+                "expected a number, found a blank field",
+            ));
+        }
+    }
+    let line_of = |idx: usize| lines[idx / 4];
+    let iode = whole_in(path, line_of(0), "IODE", f[0], 0.0, 1023.0)? as u16;
+    let e = f[5];
+    if !(0.0..1.0).contains(&e) {
+        return Err(InputError::at_field(
+            path,
+            line_of(5),
+            "e",
+            format!("expected 0 <= e < 1, found {e}"),
+        ));
+    }
+    if !(f[7] > 1_000.0 && f[7] < 10_000.0) {
+        return Err(InputError::at_field(
+            path,
+            line_of(7),
+            "sqrt(A)",
+            format!("expected 1000..10000 sqrt(m), found {}", f[7]),
+        ));
+    }
+    if !(0.0..SECONDS_PER_WEEK).contains(&f[8]) {
+        return Err(InputError::at_field(
+            path,
+            line_of(8),
+            "Toe",
+            format!("expected 0 <= toe < 604800 s, found {}", f[8]),
+        ));
+    }
+    let mut week = whole_in(path, line_of(18), "GPS Week", f[18], 0.0, 1e5)? as i32;
+    // A week given modulo 1024 is moved next to toc's week.
+    if (toc.week - week).abs() > 512 {
+        week += 1024 * ((toc.week - week) as f64 / 1024.0).round() as i32;
+    }
+    let toe = GpsTime::new(week, f[8]);
+    let health = whole_in(
+        path,
+        line_of(21),
+        "SV health",
+        f[21],
+        0.0,
+        f64::from(u32::MAX),
+    )? as u32;
+    let iodc = whole_in(path, line_of(23), "IODC", f[23], 0.0, 1023.0)? as u16;
+    let transmission_time = if present[24] && f[24] < TT_UNKNOWN * 0.999 {
+        // Seconds of the toe week; moved to within half a week of toe.
+        let mut tt = GpsTime::new(week, f[24]);
+        let d = tt.diff_s(&toe);
+        if d > HALF_WEEK_S {
+            tt = tt.add_s(-SECONDS_PER_WEEK);
+        } else if d < -HALF_WEEK_S {
+            tt = tt.add_s(SECONDS_PER_WEEK);
+        }
+        Some(tt)
+    } else {
+        None
+    };
+    // Fit interval in hours (3.04 Table A6); 0 or a 0/1 flag value means 4 h.
+    let fit_interval_h = if f[25] >= 4.0 { f[25] } else { 4.0 };
+    Ok(GpsEphemeris {
+        prn: prn as u8,
+        toc,
+        af0_s: af0,
+        af1_s_per_s: af1,
+        af2_s_per_s2: af2,
+        iode,
+        crs_m: f[1],
+        delta_n_rad_per_s: f[2],
+        m0_rad: f[3],
+        cuc_rad: f[4],
+        e,
+        cus_rad: f[6],
+        sqrt_a_sqrt_m: f[7],
+        toe,
+        cic_rad: f[9],
+        omega0_rad: f[10],
+        cis_rad: f[11],
+        i0_rad: f[12],
+        crc_m: f[13],
+        omega_rad: f[14],
+        omega_dot_rad_per_s: f[15],
+        idot_rad_per_s: f[16],
+        codes_l2: f[17],
+        l2p_flag: f[19],
+        sv_accuracy_m: f[20],
+        health,
+        tgd_s: f[22],
+        iodc,
+        transmission_time,
+        fit_interval_h,
+    })
+}
+
+/// A number as a Fortran-style `D19.12` field written with `E` (RINEX 3.04 §6.7 allows
+/// either letter): sign or blank, `d.dddddddddddd`, `E+ee`. Exactly 19 characters.
+fn d19(v: f64) -> io::Result<String> {
+    fixed_exp(v, 12, 19)
+}
+
+fn fixed_exp(v: f64, decimals: usize, width: usize) -> io::Result<String> {
+    if !v.is_finite() || v.abs() >= 1e99 {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!("value {v} does not fit a RINEX exponent field"),
+        ));
+    }
+    let a = v.abs();
+    let s = if a < 1e-99 {
+        format!("{:.*E}", decimals, 0.0)
+    } else {
+        format!("{:.*E}", decimals, a)
+    };
+    let (mant, exp) = s.split_once('E').unwrap_or((&s, "0"));
+    let exp: i32 = exp.parse().unwrap_or(0);
+    let sign = if v < 0.0 && a >= 1e-99 { '-' } else { ' ' };
+    let body = format!(
+        "{sign}{mant}E{}{:02}",
+        if exp < 0 { '-' } else { '+' },
+        exp.abs()
+    );
+    Ok(format!("{body:>width$}"))
+}
+
+fn header(w: &mut impl Write, content: &str, label: &str) -> io::Result<()> {
+    writeln!(w, "{content:<60}{label}")
+}
+
+/// Current UTC date for `PGM / RUN BY / DATE` as `yyyymmdd hhmmss UTC`.
+pub(crate) fn utc_now_stamp() -> String {
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_secs() as i64)
+        .unwrap_or(0);
+    let (y, m, d) = crate::time::civil_from_days(secs.div_euclid(86_400));
+    let sod = secs.rem_euclid(86_400);
+    format!(
+        "{y:04}{m:02}{d:02} {:02}{:02}{:02} UTC",
+        sod / 3600,
+        (sod % 3600) / 60,
+        sod % 60
+    )
+}
+
+/// Write a RINEX 3.04 GPS navigation file (header + one 8-line record per ephemeris).
+/// `program` goes into `PGM / RUN BY / DATE` (at most 20 characters kept), with the
+/// current UTC date.
+pub fn write_rinex3_nav(w: &mut impl Write, nav: &RinexNav, program: &str) -> io::Result<()> {
+    write_rinex3_nav_dated(w, nav, program, &utc_now_stamp())
+}
+
+/// [`write_rinex3_nav`] with a given `PGM / RUN BY / DATE` date (`yyyymmdd hhmmss UTC`),
+/// for reproducible output.
+pub fn write_rinex3_nav_dated(
+    w: &mut impl Write,
+    nav: &RinexNav,
+    program: &str,
+    date: &str,
+) -> io::Result<()> {
+    header(
+        w,
+        &format!(
+            "{:9.2}{:11}{:<20}{:<20}",
+            3.04, "", "N: GNSS NAV DATA", "G: GPS"
+        ),
+        "RINEX VERSION / TYPE",
+    )?;
+    let pgm: String = program.chars().take(20).collect();
+    header(
+        w,
+        &format!("{pgm:<20}{:<20}{:<20}", "", date),
+        "PGM / RUN BY / DATE",
+    )?;
+    for (kind, c) in [("GPSA", nav.iono_alpha), ("GPSB", nav.iono_beta)] {
+        if let Some(c) = c {
+            let mut s = format!("{kind} ");
+            for v in c {
+                s.push_str(&fixed_exp(v, 4, 12)?);
+            }
+            header(w, &s, "IONOSPHERIC CORR")?;
+        }
+    }
+    if let Some(ls) = nav.leap_seconds {
+        header(w, &format!("{ls:6}"), "LEAP SECONDS")?;
+    }
+    header(w, "", "END OF HEADER")?;
+    for e in &nav.gps {
+        let c = e.toc.to_calendar();
+        let sec = c.second.round() as u32;
+        write!(
+            w,
+            "G{:02} {:04} {:02} {:02} {:02} {:02} {:02}",
+            e.prn,
+            c.year,
+            c.month,
+            c.day,
+            c.hour,
+            c.minute,
+            sec.min(59)
+        )?;
+        writeln!(
+            w,
+            "{}{}{}",
+            d19(e.af0_s)?,
+            d19(e.af1_s_per_s)?,
+            d19(e.af2_s_per_s2)?
+        )?;
+        let tt = match e.transmission_time {
+            Some(t) => t.diff_s(&GpsTime::new(e.toe.week, 0.0)),
+            None => TT_UNKNOWN,
+        };
+        let rows: [[f64; 4]; 7] = [
+            [f64::from(e.iode), e.crs_m, e.delta_n_rad_per_s, e.m0_rad],
+            [e.cuc_rad, e.e, e.cus_rad, e.sqrt_a_sqrt_m],
+            [e.toe.sow, e.cic_rad, e.omega0_rad, e.cis_rad],
+            [e.i0_rad, e.crc_m, e.omega_rad, e.omega_dot_rad_per_s],
+            [
+                e.idot_rad_per_s,
+                e.codes_l2,
+                f64::from(e.toe.week),
+                e.l2p_flag,
+            ],
+            [
+                e.sv_accuracy_m,
+                f64::from(e.health),
+                e.tgd_s,
+                f64::from(e.iodc),
+            ],
+            [tt, e.fit_interval_h, 0.0, 0.0],
+        ];
+        for (k, row) in rows.iter().enumerate() {
+            let n = if k == 6 { 2 } else { 4 };
+            let mut s = String::from("    ");
+            for v in row.iter().take(n) {
+                s.push_str(&d19(*v)?);
+            }
+            writeln!(w, "{s}")?;
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn d19_is_19_wide() {
+        assert_eq!(d19(-3.44484578818e-4).unwrap(), "-3.444845788180E-04");
+        assert_eq!(d19(5153.64527702).unwrap(), " 5.153645277020E+03");
+        assert_eq!(d19(0.0).unwrap(), " 0.000000000000E+00");
+        assert_eq!(fixed_exp(1.1176e-8, 4, 12).unwrap(), "  1.1176E-08");
+        assert!(d19(f64::NAN).is_err());
+    }
+}

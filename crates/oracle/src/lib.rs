@@ -1,0 +1,1 @@
+//! No library code: the oracle tests live in `tests/`.

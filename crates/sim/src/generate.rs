@@ -1,0 +1,666 @@
+//! One pass over a scenario: truth, IMU, odometer and GNSS are produced in time order
+//! and streamed to files (memory stays flat for any duration). The files are listed
+//! in docs/SIMULATOR.md.
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use nalgebra::{UnitQuaternion, Vector3};
+use navfuse_core::types::{ImuErrors, NavState};
+use navfuse_gnss::constellation::{nominal_gps24, seed000_table3};
+use navfuse_gnss::ephemeris::GpsEphemeris;
+use navfuse_gnss::time::GpsTime;
+use navfuse_io::error::InputError;
+use navfuse_io::fmt::push_fixed9;
+use navfuse_io::nav::{ImuErrWriter, NavWriter, SolutionRecord};
+use navfuse_io::rinex_nav::{read_rinex_nav, write_rinex3_nav_dated, RinexNav};
+use navfuse_io::rinex_obs::{ObsHeader, RinexObsWriter};
+
+use crate::gnss_sim::{EventSpec, GnssSim};
+use crate::imu_model::{ImuErrorModel, ImuOutput};
+use crate::random::Stream;
+use crate::scenario::Scenario;
+use crate::trajectory::{TruthGenerator, TruthSample};
+
+/// What a run produced (also written as sim_summary.json by the CLI).
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct SimSummary {
+    pub scenario: String,
+    pub seed: u64,
+    pub gps_week: u32,
+    pub t_start: f64,
+    pub t_end: f64,
+    pub imu_samples: u64,
+    pub imu_rate_hz: f64,
+    pub imu_grade: String,
+    pub truth_epochs: u64,
+    pub gnss_epochs: u64,
+    pub gnss_fixes: u64,
+    pub satellites_min: usize,
+    pub satellites_max: usize,
+    pub odometer_epochs: u64,
+    pub dgps_corrections: u64,
+    pub distance_m: f64,
+    pub files: Vec<String>,
+    pub elapsed_s: f64,
+}
+
+/// A buffered output file.
+struct Out {
+    path: PathBuf,
+    w: BufWriter<File>,
+}
+
+impl Out {
+    fn create(dir: &Path, name: &str, files: &mut Vec<String>) -> Result<Out, InputError> {
+        let path = dir.join(name);
+        let f = File::create(&path).map_err(|e| InputError::create(&path, &e))?;
+        files.push(name.to_string());
+        Ok(Out {
+            path,
+            w: BufWriter::with_capacity(1 << 20, f),
+        })
+    }
+
+    fn put(&mut self, bytes: &[u8]) -> Result<(), InputError> {
+        self.w
+            .write_all(bytes)
+            .map_err(|e| InputError::write(&self.path, &e))
+    }
+
+    fn finish(mut self) -> Result<(), InputError> {
+        self.w
+            .flush()
+            .map_err(|e| InputError::write(&self.path, &e))
+    }
+}
+
+fn io_err(path: &Path) -> impl Fn(std::io::Error) -> InputError + '_ {
+    move |e| InputError::write(path, &e)
+}
+
+/// The constellation and Klobuchar coefficients a scenario asks for.
+fn constellation(
+    sc: &Scenario,
+) -> Result<(Vec<GpsEphemeris>, Option<([f64; 4], [f64; 4])>), InputError> {
+    let g = sc.file.gnss.as_ref().expect("called with [gnss]");
+    let week = sc.file.start.gps_week as i32;
+    // Nominal ephemerides referenced to the start (the nearest even hour).
+    let toe_sow = (sc.file.start.time_s / 7200.0).round() * 7200.0;
+    match g.constellation.as_str() {
+        "nominal24" => Ok((nominal_gps24(GpsTime::new(week, toe_sow)), None)),
+        "seed000" => Ok((seed000_table3(week), None)),
+        _ => {
+            let p = sc
+                .base_dir()
+                .join(g.rinex_nav.as_deref().unwrap_or_default());
+            let nav = read_rinex_nav(&p)?;
+            let iono = nav.iono_alpha.zip(nav.iono_beta);
+            Ok((nav.gps, iono))
+        }
+    }
+}
+
+/// Run the scenario and write everything into `out_dir` (created if needed).
+pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError> {
+    let started = Instant::now();
+    std::fs::create_dir_all(out_dir).map_err(|e| InputError::create(out_dir, &e))?;
+    let mut files = Vec::new();
+    let week = sc.file.start.gps_week;
+    let seed = sc.file.seed;
+    let traj = &sc.trajectory;
+    let imu_rate = sc.imu.rate_hz;
+    let mut gen = TruthGenerator::new(traj, sc.rig, imu_rate);
+    let mut imu_model = ImuErrorModel::new(&sc.imu_grade, seed);
+
+    // Scenario copy, for provenance.
+    {
+        let mut o = Out::create(out_dir, "scenario.toml", &mut files)?;
+        o.put(sc.text.as_bytes())?;
+        o.finish()?;
+    }
+
+    let (imu_name, imu_header) = match sc.imu.output {
+        ImuOutput::Increments => ("imu.txt", None),
+        ImuOutput::Rates => (
+            "imu.csv",
+            Some("t_s,gyro_x_radps,gyro_y_radps,gyro_z_radps,acc_x_mps2,acc_y_mps2,acc_z_mps2\n"),
+        ),
+    };
+    let mut imu_out = Out::create(out_dir, imu_name, &mut files)?;
+    if let Some(h) = imu_header {
+        imu_out.put(h.as_bytes())?;
+    }
+    let truth_path = out_dir.join("truth.nav");
+    let mut truth_out = NavWriter::create(&truth_path)?;
+    files.push("truth.nav".into());
+    let mut err_out = if sc.file.output.truth_imu_errors {
+        files.push("truth_imu_err.txt".into());
+        Some(ImuErrWriter::create(&out_dir.join("truth_imu_err.txt"))?)
+    } else {
+        None
+    };
+
+    // Odometer.
+    let odo = sc.file.odometer.clone();
+    let mut odo_out = match &odo {
+        Some(_) => {
+            let mut o = Out::create(out_dir, "odometer.txt", &mut files)?;
+            o.put(
+                b"# t [s of GPS week], pulses (cumulative), pulses in the interval, speed [m/s]\n",
+            )?;
+            Some(o)
+        }
+        None => None,
+    };
+    let odo_every = odo
+        .as_ref()
+        .map(|o| (imu_rate / o.rate_hz).round().max(1.0) as u64);
+    let mut odo_rng = Stream::new(seed, "odometer");
+    let mut distance = 0.0_f64;
+    let mut odo_pulses_prev: i64 = 0;
+    let mut odo_t_prev = traj.t_start();
+
+    // GNSS.
+    let gspec = sc.file.gnss.clone();
+    let mut gnss = None;
+    let mut gnss_every = 0u64;
+    let mut obs_w = None;
+    let mut fix_out = None;
+    let mut head_out = None;
+    let mut dgps_out = None;
+    let mut err_csv = None;
+    if let Some(g) = &gspec {
+        let (ephs, iono) = constellation(sc)?;
+        let sim = GnssSim::new(
+            g,
+            ephs.clone(),
+            iono,
+            seed,
+            week,
+            traj.t_start(),
+            &traj_start_lla(sc),
+        );
+        gnss_every = (imu_rate / g.rate_hz).round().max(1.0) as u64;
+        if g.raw {
+            // File date = the scenario start (UTC ~ GPST - 18 s ignored): output depends
+            // only on the scenario, never on the wall clock.
+            let stamp = {
+                let c = GpsTime::new(week as i32, traj.t_start()).to_calendar();
+                format!(
+                    "{:04}{:02}{:02} {:02}{:02}{:02} UTC",
+                    c.year, c.month, c.day, c.hour, c.minute, c.second as u32
+                )
+            };
+            let (alpha, beta) = sim.iono_coefficients();
+            let nav = RinexNav {
+                gps: ephs,
+                iono_alpha: Some(alpha),
+                iono_beta: Some(beta),
+                leap_seconds: Some(18),
+                skipped_records: 0,
+            };
+            let p = out_dir.join("nav.rnx");
+            let mut w = BufWriter::new(File::create(&p).map_err(|e| InputError::create(&p, &e))?);
+            write_rinex3_nav_dated(&mut w, &nav, "navfuse sim", &stamp).map_err(io_err(&p))?;
+            w.flush().map_err(io_err(&p))?;
+            files.push("nav.rnx".into());
+            let p = out_dir.join("obs.rnx");
+            let f = File::create(&p).map_err(|e| InputError::create(&p, &e))?;
+            let s0 = gen.current();
+            let hdr = ObsHeader {
+                marker_name: "NAVFUSE_SIM".into(),
+                approx_pos_ecef_m: navfuse_core::earth::lla_to_ecef(&s0.lla),
+                antenna_delta_hen_m: Vector3::zeros(),
+                interval_s: Some(1.0 / g.rate_hz),
+                first_obs: GpsTime::new(week as i32, traj.t_start()),
+                receiver: [
+                    "SIM".into(),
+                    "navfuse sim".into(),
+                    env!("CARGO_PKG_VERSION").into(),
+                ],
+                antenna: ["SIM".into(), "SIM".into()],
+                program: "navfuse sim".into(),
+                date: Some(stamp.clone()),
+            };
+            obs_w = Some((
+                RinexObsWriter::new(BufWriter::with_capacity(1 << 20, f), &hdr)
+                    .map_err(io_err(&p))?,
+                p,
+            ));
+            files.push("obs.rnx".into());
+        }
+        if g.fix.is_some() {
+            let mut o = Out::create(out_dir, "gnss.txt", &mut files)?;
+            o.put(b"# t [s of GPS week], lat lon [deg], h [m], std N E D [m], vN vE vD [m/s], std vN vE vD [m/s]; antenna\n")?;
+            fix_out = Some(o);
+        }
+        if g.heading.is_some() {
+            let mut o = Out::create(out_dir, "heading.txt", &mut files)?;
+            o.put(b"# t [s of GPS week], heading of the antenna baseline [deg, 0..360 from north], std [deg]\n")?;
+            head_out = Some(o);
+        }
+        if g.dgps.is_some() {
+            let mut o = Out::create(out_dir, "dgps.csv", &mut files)?;
+            let r = sim.reference_lla().expect("dgps on");
+            let line = format!(
+                "# navfuse DGPS corrections v1; reference station lat {:.9} deg lon {:.9} deg h {:.3} m; corrected P = P + prc_m + rrc_mps (t - t_s)\nt_s,prn,prc_m,rrc_mps,iode\n",
+                r.x.to_degrees(),
+                r.y.to_degrees(),
+                r.z
+            );
+            o.put(line.as_bytes())?;
+            dgps_out = Some(o);
+        }
+        let mut o = Out::create(out_dir, "gnss_errors.csv", &mut files)?;
+        o.put(b"t_s,prn,el_deg,az_deg,iono_m,tropo_m,sat_clock_m,orbit_m,multipath_m,noise_m,rx_clock_m,sa_m,total_m,dgps_age_s,dgps_iono_m,dgps_tropo_m,dgps_sat_clock_m,dgps_orbit_m,dgps_multipath_m,dgps_noise_m,dgps_sa_m,spoof_range_m\n")?;
+        err_csv = Some(o);
+        gnss = Some(sim);
+    }
+
+    let mut summary = SimSummary {
+        scenario: sc.path.display().to_string(),
+        seed,
+        gps_week: week,
+        t_start: traj.t_start(),
+        imu_rate_hz: imu_rate,
+        imu_grade: sc.imu_grade.name.clone(),
+        satellites_min: usize::MAX,
+        ..Default::default()
+    };
+    let mut line = Vec::with_capacity(256);
+    let mut k: u64 = 0;
+    let mut cur = gen.current();
+    let write_truth = |s: &TruthSample,
+                       e: &ImuErrors,
+                       tw: &mut NavWriter,
+                       ew: &mut Option<ImuErrWriter>|
+     -> Result<(), InputError> {
+        let rec = SolutionRecord {
+            gps_week: week,
+            nav: NavState {
+                t: s.t,
+                lla: s.lla,
+                v_n: s.v_n,
+                q_bn: UnitQuaternion::from_matrix(&s.c_bn),
+            },
+            imu_errors: *e,
+            std: None,
+        };
+        tw.write(&rec)?;
+        if let Some(w) = ew {
+            w.write(&rec)?;
+        }
+        Ok(())
+    };
+    write_truth(
+        &cur,
+        &imu_model.current_errors().to_core(),
+        &mut truth_out,
+        &mut err_out,
+    )?;
+    summary.truth_epochs += 1;
+    loop {
+        // GNSS at the current sample time.
+        if let Some(sim) = gnss.as_mut() {
+            if k % gnss_every == 0 {
+                let ep = sim.epoch(&cur);
+                summary.gnss_epochs += 1;
+                if !ep.outage {
+                    summary.satellites_min = summary.satellites_min.min(ep.sats.len());
+                    summary.satellites_max = summary.satellites_max.max(ep.sats.len());
+                }
+                if let Some((w, p)) = obs_w.as_mut() {
+                    if !ep.sats.is_empty() {
+                        let obs: Vec<_> = ep.sats.iter().map(|s| s.obs.clone()).collect();
+                        w.write_epoch(GpsTime::new(week as i32, ep.t), &obs)
+                            .map_err(io_err(p))?;
+                    }
+                }
+                if let (Some(o), Some(f)) = (fix_out.as_mut(), ep.fix) {
+                    line.clear();
+                    push_fixed9(&mut line, f.t);
+                    for v in [f.lla.x.to_degrees(), f.lla.y.to_degrees()] {
+                        line.push(b' ');
+                        push_fixed9(&mut line, v);
+                    }
+                    for v in [
+                        f.lla.z,
+                        f.std_ned.x,
+                        f.std_ned.y,
+                        f.std_ned.z,
+                        f.vel_ned.x,
+                        f.vel_ned.y,
+                        f.vel_ned.z,
+                        f.vel_std,
+                        f.vel_std,
+                        f.vel_std,
+                    ] {
+                        line.push(b' ');
+                        push_fixed9(&mut line, v);
+                    }
+                    line.push(b'\n');
+                    o.put(&line)?;
+                    summary.gnss_fixes += 1;
+                }
+                if let (Some(o), Some((psi, std))) = (head_out.as_mut(), ep.heading) {
+                    line.clear();
+                    push_fixed9(&mut line, ep.t);
+                    line.push(b' ');
+                    push_fixed9(&mut line, psi.to_degrees());
+                    line.push(b' ');
+                    push_fixed9(&mut line, std.to_degrees());
+                    line.push(b'\n');
+                    o.put(&line)?;
+                }
+                if let Some(o) = dgps_out.as_mut() {
+                    for c in &ep.corrections {
+                        let s = format!(
+                            "{:.3},{},{:.4},{:.6},{}\n",
+                            c.t, c.prn, c.prc_m, c.rrc_mps, c.iode
+                        );
+                        o.put(s.as_bytes())?;
+                        summary.dgps_corrections += 1;
+                    }
+                }
+                if let Some(o) = err_csv.as_mut() {
+                    use std::fmt::Write as _;
+                    let mut s = String::new();
+                    for sat in &ep.sats {
+                        let e = &sat.errors;
+                        let _ = write!(
+                            s,
+                            "{:.3},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},",
+                            ep.t,
+                            sat.obs.prn,
+                            sat.el_rad.to_degrees(),
+                            sat.az_rad.to_degrees(),
+                            e.iono,
+                            e.tropo,
+                            e.sat_clock,
+                            e.orbit,
+                            e.multipath,
+                            e.noise,
+                            e.rx_clock,
+                            e.sa,
+                            e.total()
+                        );
+                        match (&sat.dgps_residual, sat.dgps_age_s) {
+                            (Some(r), Some(age)) => {
+                                let _ = write!(
+                                    s,
+                                    "{:.3},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},",
+                                    age,
+                                    r.iono,
+                                    r.tropo,
+                                    r.sat_clock,
+                                    r.orbit,
+                                    r.multipath,
+                                    r.noise,
+                                    r.sa
+                                );
+                            }
+                            _ => s.push_str(",,,,,,,,"),
+                        }
+                        let _ = writeln!(s, "{:.4}", sat.spoof_range_m);
+                    }
+                    o.put(s.as_bytes())?;
+                }
+            }
+        }
+
+        let Some((imu_true, next)) = gen.step() else {
+            break;
+        };
+        k += 1;
+        // Odometer distance of the vehicle reference point (trapezoid at the IMU rate).
+        distance += 0.5 * (cur.speed + next.speed) * imu_true.dt;
+        let (dth, dv) = imu_model.apply(imu_true.dt, &imu_true.dtheta, &imu_true.dvel);
+        line.clear();
+        push_fixed9(&mut line, imu_true.t);
+        // Shortest round-trip decimal of each value: a fixed 9 decimals would round a
+        // static 3.6e-7 rad increment by the same amount every sample, a gyro bias of
+        // up to 20 deg/h at 200 Hz.
+        let sep = match sc.imu.output {
+            ImuOutput::Increments => b' ',
+            ImuOutput::Rates => b',',
+        };
+        let k_rate = match sc.imu.output {
+            ImuOutput::Increments => 1.0,
+            ImuOutput::Rates => 1.0 / imu_true.dt,
+        };
+        for v in dth.iter().chain(dv.iter()) {
+            line.push(sep);
+            let _ = write!(line, "{:e}", *v * k_rate);
+        }
+        line.push(b'\n');
+        imu_out.put(&line)?;
+        summary.imu_samples += 1;
+        cur = next;
+        if k % sc.truth_every == 0 {
+            write_truth(
+                &cur,
+                &imu_model.current_errors().to_core(),
+                &mut truth_out,
+                &mut err_out,
+            )?;
+            summary.truth_epochs += 1;
+        }
+        if let (Some(o), Some(every), Some(spec)) = (odo_out.as_mut(), odo_every, odo.as_ref()) {
+            if k % every == 0 {
+                // SYSTEM.md §4b: true distance = (1 + dk) K_OD N.
+                let per_pulse = spec.meters_per_pulse * (1.0 + spec.scale_error_ppm * 1e-6);
+                let pulses = (distance / per_pulse).floor() as i64;
+                let dt = cur.t - odo_t_prev;
+                let speed = (pulses - odo_pulses_prev) as f64 * spec.meters_per_pulse / dt
+                    + spec.speed_noise_mps * odo_rng.normal();
+                let s = format!(
+                    "{:.9} {} {} {:.6}\n",
+                    cur.t,
+                    pulses,
+                    pulses - odo_pulses_prev,
+                    speed
+                );
+                o.put(s.as_bytes())?;
+                odo_pulses_prev = pulses;
+                odo_t_prev = cur.t;
+                summary.odometer_epochs += 1;
+            }
+        }
+    }
+    summary.t_end = cur.t;
+    summary.distance_m = distance;
+    if summary.satellites_min == usize::MAX {
+        summary.satellites_min = 0;
+    }
+
+    imu_out.finish()?;
+    truth_out.finish()?;
+    if let Some(w) = err_out {
+        w.finish()?;
+    }
+    for o in [odo_out, fix_out, head_out, dgps_out, err_csv]
+        .into_iter()
+        .flatten()
+    {
+        o.finish()?;
+    }
+    if let Some((w, p)) = obs_w {
+        let mut inner = w.finish().map_err(io_err(&p))?;
+        inner.flush().map_err(io_err(&p))?;
+    }
+    write_events(sc, out_dir, &mut files)?;
+    write_run_config(sc, out_dir, &mut files)?;
+    summary.files = files;
+    summary.elapsed_s = started.elapsed().as_secs_f64();
+    Ok(summary)
+}
+
+fn traj_start_lla(sc: &Scenario) -> Vector3<f64> {
+    let p = sc.file.start.position_deg_m;
+    Vector3::new(p[0].to_radians(), p[1].to_radians(), p[2])
+}
+
+/// events.csv: every configured GNSS event in absolute GPS time (the truth labels
+/// an evaluator needs, e.g. for spoofing detection).
+fn write_events(sc: &Scenario, dir: &Path, files: &mut Vec<String>) -> Result<(), InputError> {
+    let Some(g) = &sc.file.gnss else {
+        return Ok(());
+    };
+    let t0 = sc.trajectory.t_start();
+    let t_end = sc.trajectory.t_end();
+    let mut o = Out::create(dir, "events.csv", files)?;
+    o.put(b"type,start_s,end_s,details\n")?;
+    for ev in &g.events {
+        let line = match ev {
+            EventSpec::Outage { start_s, end_s } => {
+                format!("outage,{:.3},{:.3},\n", t0 + start_s, t0 + end_s)
+            }
+            EventSpec::OutageEvery {
+                length_s,
+                period_s,
+                from_s,
+                until_s,
+            } => {
+                let mut s = String::new();
+                let mut a = t0 + from_s;
+                let until = until_s.map_or(t_end, |u| t0 + u);
+                while a < until && a < t_end {
+                    s.push_str(&format!("outage,{:.3},{:.3},periodic\n", a, a + length_s));
+                    a += period_s;
+                }
+                s
+            }
+            EventSpec::Blockage {
+                start_s,
+                end_s,
+                keep,
+                prns,
+            } => format!(
+                "blockage,{:.3},{:.3},{}\n",
+                t0 + start_s,
+                t0 + end_s,
+                match (keep, prns) {
+                    (Some(k), _) => format!("keep {k}"),
+                    (_, Some(p)) => format!("prns {p:?}").replace(',', ""),
+                    _ => String::new(),
+                }
+            ),
+            EventSpec::Spoof {
+                mode,
+                start_s,
+                end_s,
+                offset_m,
+                velocity_mps,
+                delay_s,
+            } => format!(
+                "spoof,{:.3},{:.3},{:?} offset_m {:?} velocity_mps {:?} delay_s {}\n",
+                t0 + start_s,
+                t0 + end_s,
+                mode,
+                offset_m,
+                velocity_mps,
+                delay_s
+            )
+            .replace(", ", " "),
+            EventSpec::CycleSlip { prn, at_s, cycles } => {
+                format!(
+                    "cycle_slip,{:.3},{:.3},G{prn:02} {cycles} cycles\n",
+                    t0 + at_s,
+                    t0 + at_s
+                )
+            }
+            EventSpec::LossOfLock {
+                prn,
+                start_s,
+                end_s,
+            } => {
+                format!(
+                    "loss_of_lock,{:.3},{:.3},G{prn:02}\n",
+                    t0 + start_s,
+                    t0 + end_s
+                )
+            }
+        };
+        o.put(line.as_bytes())?;
+    }
+    o.finish()
+}
+
+/// run.toml: a navfuse run configuration for the generated files (loose coupling on
+/// gnss.txt when there are fixes, pure inertial otherwise), initialised from the truth,
+/// with the IMU noise model of the simulated grade.
+fn write_run_config(sc: &Scenario, dir: &Path, files: &mut Vec<String>) -> Result<(), InputError> {
+    let t0 = sc.trajectory.t_start();
+    let mut g = TruthGenerator::new(&sc.trajectory, sc.rig, sc.imu.rate_hz);
+    let s0 = g.current();
+    let _ = g.step();
+    let e = s0.euler();
+    let grade = &sc.imu_grade;
+    const RAD_TO_DEG: f64 = 180.0 / std::f64::consts::PI;
+    let tiny = |x: f64, floor: f64| if x > floor { x } else { floor };
+    let arw = tiny(grade.gyro.white_noise_density * RAD_TO_DEG * 60.0, 1e-5);
+    let vrw = tiny(grade.accel.white_noise_density * 60.0, 1e-5);
+    let gb = tiny(
+        grade.gyro.turn_on_bias_sigma.hypot(grade.gyro.gm_sigma()) * RAD_TO_DEG * 3600.0,
+        1e-4,
+    );
+    let ab = tiny(
+        grade.accel.turn_on_bias_sigma.hypot(grade.accel.gm_sigma()) * 1e5,
+        1e-2,
+    );
+    let gs = tiny(grade.gyro.scale_sigma * 1e6, 1.0);
+    let asc = tiny(grade.accel.scale_sigma * 1e6, 1.0);
+    let tau_h = {
+        let t = grade.gyro.bias_corr_time_s;
+        if t.is_finite() && t > 0.0 {
+            t / 3600.0
+        } else {
+            1.0
+        }
+    };
+    let (imu_file, imu_fmt) = match sc.imu.output {
+        ImuOutput::Increments => ("imu.txt", "format = \"kf-gins\""),
+        ImuOutput::Rates => (
+            "imu.csv",
+            "format = \"csv\"\n\n[imu.csv]\nskip_lines = 1\ntime_col = 1\ngyro_cols = [2, 3, 4]\naccel_cols = [5, 6, 7]\nquantity = \"rate\"\nrate_sampling = \"interval_mean\"",
+        ),
+    };
+    let mut s = format!(
+        "# Written by `navfuse sim` for {}: run with `navfuse run run.toml --out DIR`.\n\
+         # Initial state = the truth at the start; IMU noise = the simulated grade ({}).\n\n\
+         [imu]\nfile = \"{imu_file}\"\nrate_hz = {}\n{imu_fmt}\n\n",
+        sc.path.display(),
+        grade.name,
+        sc.imu.rate_hz
+    );
+    if let Some(gs_) = &sc.file.gnss {
+        if gs_.fix.is_some() {
+            let l = gs_.antenna_lever_arm_m;
+            s.push_str(&format!(
+                "[gnss]\nfile = \"gnss.txt\"\nformat = \"kf-gins\"\nlever_arm_m = [{}, {}, {}]\n\n",
+                l[0], l[1], l[2]
+            ));
+        }
+    }
+    s.push_str(&format!(
+        "[time]\nstart = {t0}\n\n[initial]\nposition_deg_m = [{:.12}, {:.12}, {:.6}]\nvelocity_mps = [{:.9}, {:.9}, {:.9}]\nattitude_deg = [{:.9}, {:.9}, {:.9}]\n\
+         position_std_m = 0.01\nvelocity_std_mps = 0.001\nattitude_std_deg = 0.01\n\n\
+         [imu_noise]\narw_deg_sqrth = {arw}\nvrw_mps_sqrth = {vrw}\ngyro_bias_std_degph = {gb}\naccel_bias_std_mgal = {ab}\n\
+         gyro_scale_std_ppm = {gs}\naccel_scale_std_ppm = {asc}\ncorr_time_h = {tau_h}\n\n[output]\nimu_err = false\nstd = false\n",
+        s0.lla.x.to_degrees(),
+        s0.lla.y.to_degrees(),
+        s0.lla.z,
+        s0.v_n.x,
+        s0.v_n.y,
+        s0.v_n.z,
+        e.x.to_degrees(),
+        e.y.to_degrees(),
+        e.z.to_degrees()
+    ));
+    let mut o = Out::create(dir, "run.toml", files)?;
+    o.put(s.as_bytes())?;
+    o.finish()
+}

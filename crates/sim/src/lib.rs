@@ -1,0 +1,19 @@
+//! navfuse simulator: everything the navigator reads, with exact truth.
+//!
+//! - [`scenario`]: the scenario file (TOML), validated.
+//! - [`trajectory`]: truth from a list of segments, consistent with the navigator's
+//!   WGS-84 mechanization; perfect IMU increments integrated over each interval.
+//! - [`random`]: seeded random streams and Gauss-Markov processes.
+//! - [`imu_model`]: IMU grades (presets and custom) applied to perfect increments.
+//! - [`allan`]: Allan deviation, to check the IMU models.
+//! - [`gnss_sim`]: constellation, raw measurements with an error budget, DGPS, fixes,
+//!   dual-antenna heading, events.
+//! - [`generate`]: one streaming pass that writes every output file.
+
+pub mod allan;
+pub mod generate;
+pub mod gnss_sim;
+pub mod imu_model;
+pub mod random;
+pub mod scenario;
+pub mod trajectory;
