@@ -73,7 +73,7 @@ impl GpsTime {
 
     /// From a GPST calendar date; None for an invalid date or time of day.
     pub fn from_calendar(c: &GpstCalendar) -> Option<GpsTime> {
-        let dim = days_in_month(c.year, c.month);
+        let dim = days_in_month(i64::from(c.year), c.month);
         if dim == 0
             || c.day == 0
             || c.day > dim
@@ -113,7 +113,7 @@ impl GpsTime {
 }
 
 /// Days from 1970-01-01 to a proleptic Gregorian date (days-from-civil algorithm).
-fn days_from_civil(year: i64, month: u32, day: u32) -> i64 {
+pub fn days_from_civil(year: i64, month: u32, day: u32) -> i64 {
     let y = if month <= 2 { year - 1 } else { year };
     let era = y.div_euclid(400);
     let yoe = y - era * 400;
@@ -125,7 +125,7 @@ fn days_from_civil(year: i64, month: u32, day: u32) -> i64 {
 }
 
 /// Inverse of [`days_from_civil`].
-fn civil_from_days(days: i64) -> (i64, u32, u32) {
+pub fn civil_from_days(days: i64) -> (i64, u32, u32) {
     let z = days + 719_468;
     let era = z.div_euclid(146_097);
     let doe = z - era * 146_097;
@@ -137,7 +137,8 @@ fn civil_from_days(days: i64) -> (i64, u32, u32) {
     (yoe + era * 400 + i64::from(month <= 2), month, day)
 }
 
-fn days_in_month(year: i32, month: u32) -> u32 {
+/// Days in a month (1-12) of a year; 0 for an invalid month.
+pub fn days_in_month(year: i64, month: u32) -> u32 {
     let leap = (year % 4 == 0 && year % 100 != 0) || year % 400 == 0;
     match month {
         1 | 3 | 5 | 7 | 8 | 10 | 12 => 31,

@@ -69,7 +69,7 @@ const ORBIT_FIELDS: [&str; 28] = [
 ];
 
 /// The text of columns [a, b) of a line (clamped to its length).
-fn cols(line: &[u8], a: usize, b: usize) -> &[u8] {
+pub(crate) fn cols(line: &[u8], a: usize, b: usize) -> &[u8] {
     let b = b.min(line.len());
     if a >= b {
         &[]
@@ -533,8 +533,11 @@ fn fixed_exp(v: f64, decimals: usize, width: usize) -> io::Result<String> {
     Ok(format!("{body:>width$}"))
 }
 
-fn header(w: &mut impl Write, content: &str, label: &str) -> io::Result<()> {
-    writeln!(w, "{content:<60}{label}")
+/// One header line: content in columns 1-60 (cut to 60), label from column 61
+/// (RINEX 3.04 §5.1).
+pub(crate) fn header(w: &mut impl Write, content: &str, label: &str) -> io::Result<()> {
+    let c: String = content.chars().take(60).collect();
+    writeln!(w, "{c:<60}{label}")
 }
 
 /// Current UTC date for `PGM / RUN BY / DATE` as `yyyymmdd hhmmss UTC`.

@@ -11,7 +11,7 @@
 
 use crate::error::InputError;
 use crate::fmt::LineReader;
-use crate::rinex_nav::utc_now_stamp;
+use crate::rinex_nav::{cols, header, utc_now_stamp};
 use nalgebra::Vector3;
 use navfuse_gnss::time::GpstCalendar;
 use navfuse_gnss::GpsTime;
@@ -88,11 +88,6 @@ pub struct RinexObsWriter<W: Write> {
     w: W,
 }
 
-fn hline(w: &mut impl Write, content: &str, label: &str) -> io::Result<()> {
-    let c: String = content.chars().take(60).collect();
-    writeln!(w, "{c:<60}{label}")
-}
-
 fn a20(s: &str) -> String {
     s.chars().take(20).collect()
 }
@@ -112,7 +107,7 @@ fn f14_3(v: f64) -> io::Result<String> {
 impl<W: Write> RinexObsWriter<W> {
     /// Write the header and return the writer.
     pub fn new(mut w: W, h: &ObsHeader) -> io::Result<Self> {
-        hline(
+        header(
             &mut w,
             &format!(
                 "{:9.2}{:11}{:<20}{:<20}",
@@ -120,7 +115,7 @@ impl<W: Write> RinexObsWriter<W> {
             ),
             "RINEX VERSION / TYPE",
         )?;
-        hline(
+        header(
             &mut w,
             &format!(
                 "{:<20}{:<20}{:<20}",
@@ -130,9 +125,9 @@ impl<W: Write> RinexObsWriter<W> {
             ),
             "PGM / RUN BY / DATE",
         )?;
-        hline(&mut w, &h.marker_name, "MARKER NAME")?;
-        hline(&mut w, "", "OBSERVER / AGENCY")?;
-        hline(
+        header(&mut w, &h.marker_name, "MARKER NAME")?;
+        header(&mut w, "", "OBSERVER / AGENCY")?;
+        header(
             &mut w,
             &format!(
                 "{:<20}{:<20}{:<20}",
@@ -142,19 +137,19 @@ impl<W: Write> RinexObsWriter<W> {
             ),
             "REC # / TYPE / VERS",
         )?;
-        hline(
+        header(
             &mut w,
             &format!("{:<20}{:<20}", a20(&h.antenna[0]), a20(&h.antenna[1])),
             "ANT # / TYPE",
         )?;
         let p = h.approx_pos_ecef_m;
-        hline(
+        header(
             &mut w,
             &format!("{:14.4}{:14.4}{:14.4}", p.x, p.y, p.z),
             "APPROX POSITION XYZ",
         )?;
         let d = h.antenna_delta_hen_m;
-        hline(
+        header(
             &mut w,
             &format!("{:14.4}{:14.4}{:14.4}", d.x, d.y, d.z),
             "ANTENNA: DELTA H/E/N",
@@ -164,13 +159,13 @@ impl<W: Write> RinexObsWriter<W> {
             types.push(' ');
             types.push_str(t);
         }
-        hline(&mut w, &types, "SYS / # / OBS TYPES")?;
-        hline(&mut w, "DBHZ", "SIGNAL STRENGTH UNIT")?;
+        header(&mut w, &types, "SYS / # / OBS TYPES")?;
+        header(&mut w, "DBHZ", "SIGNAL STRENGTH UNIT")?;
         if let Some(i) = h.interval_s {
-            hline(&mut w, &format!("{i:10.3}"), "INTERVAL")?;
+            header(&mut w, &format!("{i:10.3}"), "INTERVAL")?;
         }
         let c = h.first_obs.to_calendar();
-        hline(
+        header(
             &mut w,
             &format!(
                 "{:6}{:6}{:6}{:6}{:6}{:13.7}     GPS",
@@ -178,8 +173,8 @@ impl<W: Write> RinexObsWriter<W> {
             ),
             "TIME OF FIRST OBS",
         )?;
-        hline(&mut w, "G L1C  0.00000", "SYS / PHASE SHIFT")?;
-        hline(&mut w, "", "END OF HEADER")?;
+        header(&mut w, "G L1C  0.00000", "SYS / PHASE SHIFT")?;
+        header(&mut w, "", "END OF HEADER")?;
         Ok(RinexObsWriter { w })
     }
 
@@ -238,15 +233,6 @@ impl<W: Write> RinexObsWriter<W> {
     pub fn finish(mut self) -> io::Result<W> {
         self.w.flush()?;
         Ok(self.w)
-    }
-}
-
-fn cols(line: &[u8], a: usize, b: usize) -> &[u8] {
-    let b = b.min(line.len());
-    if a >= b {
-        &[]
-    } else {
-        line.get(a..b).unwrap_or(&[])
     }
 }
 
