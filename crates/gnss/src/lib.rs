@@ -1,16 +1,19 @@
 //! navfuse-gnss: the GNSS layer. GPS time, LNAV broadcast ephemeris (IS-GPS-200),
 //! signal geometry with light time and Earth rotation, Klobuchar and Saastamoinen
-//! delays, synthetic constellations. Pure computation: no file I/O (RINEX files are
-//! read and written by navfuse-io). See docs/GNSS.md.
+//! delays, synthetic constellations, single point positioning (`spp`). Pure
+//! computation: no file I/O (RINEX files are read and written by navfuse-io). See
+//! docs/GNSS.md.
 
 pub mod atmosphere;
 pub mod constellation;
 pub mod ephemeris;
 pub mod ephemeris_set;
 pub mod geometry;
+pub mod spp;
 pub mod time;
 
 pub use ephemeris::{GpsEphemeris, SatState};
 pub use ephemeris_set::EphemerisSet;
 pub use geometry::{az_el, signal_path, SignalPath};
+pub use spp::{SppConfig, SppError, SppMeasurement, SppSolution, SppSolver};
 pub use time::{GpsTime, GpstCalendar};
