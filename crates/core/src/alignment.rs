@@ -3,8 +3,9 @@
 //! vehicle moves. SYSTEM.md §1 "Initial alignment" (seed 002: analytic coarse, then
 //! fine alignment in the filter).
 
+use crate::attitude::c_bn_from_euler;
 use crate::types::{GnssFix, ImuSample};
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 
 /// Roll and pitch [rad] from the mean specific force in the body frame while static:
 /// f^b = C_n^b (0, 0, -g), so roll = atan2(-f_y, -f_z), pitch = atan2(f_x, |f_yz|).
@@ -27,25 +28,6 @@ pub fn mean_motion(samples: &[ImuSample]) -> Option<(Vector3<f64>, Vector3<f64>)
     Some((dv / t, dth / t))
 }
 
-/// True when a window looks static: specific-force magnitude within `f_tol` of
-/// gravity-like constancy (std of |f| below `f_tol` m/s²) and mean rate below `w_tol`.
-pub fn is_static(samples: &[ImuSample], f_tol: f64, w_tol: f64) -> bool {
-    let Some((_, w)) = mean_motion(samples) else {
-        return false;
-    };
-    let mags: Vec<f64> = samples
-        .iter()
-        .filter(|s| s.dt > 0.0)
-        .map(|s| (s.dvel / s.dt).norm())
-        .collect();
-    if mags.len() < 2 {
-        return false;
-    }
-    let m = mags.iter().sum::<f64>() / mags.len() as f64;
-    let sd = (mags.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (mags.len() - 1) as f64).sqrt();
-    sd < f_tol && w.norm() < w_tol
-}
-
 /// Course over ground [rad, from north] of the first fix at or after `t_from` whose
 /// horizontal speed is at least `min_speed` m/s: from the fix velocity when present,
 /// otherwise from the displacement to the next fix (seed 001 eq. 11).
@@ -66,10 +48,41 @@ pub fn first_course(fixes: &[GnssFix], t_from: f64, min_speed: f64) -> Option<(f
     None
 }
 
+/// Gyrocompassing (static): yaw [rad] from the mean angular rate [rad/s] and the
+/// levelled roll and pitch. In the local level frame Earth rate is
+/// (W cos(lat) cos(yaw), -W cos(lat) sin(yaw), .), so yaw = atan2(-w_l,y, w_l,x).
+pub fn gyrocompass_yaw(mean_w_b: &Vector3<f64>, roll: f64, pitch: f64) -> f64 {
+    let c_bl = c_bn_from_euler(&Vector3::new(roll, pitch, 0.0));
+    let w_l = c_bl * mean_w_b;
+    (-w_l.y).atan2(w_l.x)
+}
+
+/// In-motion coarse attitude (C_b^n) from the vehicle course over ground `course`
+/// [rad], the mean body specific force `mean_f_b` [m/s²] and the NED acceleration
+/// `a_n` [m/s²] over the same span (from GNSS velocities), gravity `g` [m/s²], and
+/// the IMU mounting C_b^m. Vehicle roll and pitch solve C_n^m (a^n - g^n) = C_b^m f^b
+/// by levelling on the acceleration-corrected specific force (fixed point; the
+/// acceleration is small next to g), yaw of the vehicle = course.
+pub fn in_motion_attitude(
+    course: f64,
+    mean_f_b: &Vector3<f64>,
+    a_n: &Vector3<f64>,
+    c_bm: &Matrix3<f64>,
+) -> Matrix3<f64> {
+    let f_m = c_bm * mean_f_b;
+    let (mut roll, mut pitch) = level(&f_m);
+    for _ in 0..8 {
+        let c_nm = c_bn_from_euler(&Vector3::new(roll, pitch, course)).transpose();
+        (roll, pitch) = level(&(f_m - c_nm * a_n));
+    }
+    c_bn_from_euler(&Vector3::new(roll, pitch, course)) * c_bm
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::attitude::c_bn_from_euler;
+    use crate::attitude::euler_from_c_bn;
+    use crate::earth::omega_ie_n;
 
     #[test]
     fn levelling_recovers_tilt() {
@@ -104,5 +117,32 @@ mod tests {
         let (t, c) = first_course(&no_v, 0.0, 2.0).unwrap();
         assert_eq!(t, 1.0);
         assert!((c - std::f64::consts::FRAC_PI_2).abs() < 1e-6);
+    }
+
+    #[test]
+    fn gyrocompass_finds_yaw_from_earth_rate() {
+        let lat = 0.7;
+        for yaw in [-2.5, -0.3, 0.0, 1.0, 3.0] {
+            let rpy = Vector3::new(0.02, -0.04, yaw);
+            let w_b = c_bn_from_euler(&rpy).transpose() * omega_ie_n(lat);
+            let y = gyrocompass_yaw(&w_b, rpy.x, rpy.y);
+            assert!((y - yaw).abs() < 1e-9, "{y} {yaw}");
+        }
+    }
+
+    /// Accelerating and climbing with the IMU mounted off-axis: the body attitude is
+    /// recovered from course, GNSS acceleration and specific force.
+    #[test]
+    fn in_motion_attitude_recovers_body_attitude() {
+        let g_n = Vector3::new(0.0, 0.0, 9.8);
+        let c_bm = c_bn_from_euler(&Vector3::new(0.01, 0.03, -0.05));
+        let vehicle = Vector3::new(0.04, 0.06, 1.2);
+        let c_mn = c_bn_from_euler(&vehicle);
+        let c_bn = c_mn * c_bm;
+        let a_n = Vector3::new(0.8, 1.5, -0.1);
+        let f_b = c_bn.transpose() * (a_n - g_n);
+        let c = in_motion_attitude(vehicle.z, &f_b, &a_n, &c_bm);
+        let e = euler_from_c_bn(&(c * c_bn.transpose()));
+        assert!(e.norm() < 1e-9, "{e:?}");
     }
 }

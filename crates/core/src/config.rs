@@ -25,17 +25,33 @@ pub struct ImuNoise {
     pub corr_time_s: f64,
 }
 
-/// How the initial attitude is found.
+/// How the initial attitude is found (SYSTEM.md §1 "Initial alignment"; alignment.rs).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum AttitudeInit {
     /// Roll, pitch, yaw [rad] given by the user.
     Given(Vector3<f64>),
     /// Roll and pitch from the mean specific force over the first `level_window_s`
     /// (the vehicle must be static then), yaw from the first GNSS course over ground at
-    /// or above `min_speed_mps` (`alignment.rs`). The filter refines both.
+    /// or above `min_speed_mps`. The filter refines both.
     LevelAndGnssCourse {
         level_window_s: f64,
         min_speed_mps: f64,
+    },
+    /// Static coarse alignment over the first `level_window_s`: roll and pitch from the
+    /// specific force, yaw by gyrocompassing. Yaw error is about
+    /// bias / (15.04 deg/h cos(lat)): 0.1 deg/h gives 0.4 deg at 21 N.
+    StaticGyrocompass { level_window_s: f64 },
+    /// In-motion alignment for low-cost IMUs: the run starts at the first GNSS epoch
+    /// whose horizontal speed is at least `min_speed_mps`; yaw from the course (minus
+    /// the IMU mounting), roll and pitch from the specific force corrected by the GNSS
+    /// acceleration, velocity from GNSS. The filter refines them (fine alignment).
+    InMotion { min_speed_mps: f64 },
+    /// Levelling and gyrocompassing / course when the first window is static, otherwise
+    /// in-motion alignment. `gyrocompass` picks the static yaw source.
+    Auto {
+        level_window_s: f64,
+        min_speed_mps: f64,
+        gyrocompass: bool,
     },
 }
 
@@ -124,6 +140,184 @@ impl Default for FilterOptions {
     }
 }
 
+/// How the IMU sits in the vehicle (SYSTEM.md §4b): the vehicle frame m has x forward
+/// along the velocity of the reference point (rear-axle centre or odometer wheel),
+/// where the non-holonomic constraint holds.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VehicleOptions {
+    /// IMU frame relative to the vehicle frame: roll, pitch, yaw [rad] (ZYX), so
+    /// C_b^m = c_bn_from_euler(mounting_rpy).
+    pub mounting_rpy: Vector3<f64>,
+    /// Lever arm from the IMU centre to the vehicle reference point, IMU frame [m].
+    pub lever_arm_b: Vector3<f64>,
+    /// Initial 1-sigma of the mounting pitch and yaw errors [rad]; 0 = the mounting is
+    /// known and not estimated. Estimated only when NHC or the odometer is used.
+    pub mounting_std: f64,
+}
+
+impl Default for VehicleOptions {
+    fn default() -> Self {
+        VehicleOptions {
+            mounting_rpy: Vector3::zeros(),
+            lever_arm_b: Vector3::zeros(),
+            mounting_std: 0.0,
+        }
+    }
+}
+
+/// When the non-holonomic constraint is applied.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NhcMode {
+    Off,
+    /// At every constraint epoch while moving.
+    Always,
+    /// Only while no GNSS measurement has been used for `NhcOptions::outage_after_s`
+    /// (seed 002's advice: the constraint matters when GNSS is degraded or lost).
+    DuringOutage,
+}
+
+/// Non-holonomic constraint: zero lateral and vertical velocity of the vehicle
+/// reference point in the vehicle frame (SYSTEM.md §4a; seed 002 eq. 1, 12).
+#[derive(Clone, Debug, PartialEq)]
+pub struct NhcOptions {
+    pub mode: NhcMode,
+    /// 1-sigma of the lateral and vertical pseudo-measurement [m/s] (seed 002: 0.1).
+    pub std_mps: [f64; 2],
+    /// Constraint rate [Hz].
+    pub rate_hz: f64,
+    /// In `DuringOutage` mode: GNSS silence [s] after which the constraint starts.
+    pub outage_after_s: f64,
+    /// Innovation test: chi-square (2 dof) tail probability at which the constraint is
+    /// judged violated (skid, ramp) and skipped; None = always applied.
+    pub gate_probability: Option<f64>,
+    /// Below this speed [m/s] the constraint is not applied (it holds trivially and
+    /// the zero-velocity update takes over); also skipped while static.
+    pub min_speed_mps: f64,
+}
+
+impl Default for NhcOptions {
+    fn default() -> Self {
+        NhcOptions {
+            mode: NhcMode::Off,
+            std_mps: [0.1, 0.1],
+            rate_hz: 10.0,
+            outage_after_s: 1.5,
+            gate_probability: Some(1e-4),
+            min_speed_mps: 0.5,
+        }
+    }
+}
+
+/// Odometer: forward speed of the vehicle reference point, with scale-factor error
+/// and mounting states (SYSTEM.md §4b; seed 004 eq. 1-7, the 18-state filter).
+#[derive(Clone, Debug, PartialEq)]
+pub struct OdometerOptions {
+    /// Use the odometer input.
+    pub enabled: bool,
+    /// 1-sigma of the speed [m/s] (includes pulse quantisation over the interval).
+    pub std_mps: f64,
+    /// Initial scale-factor estimate k: true speed = (1 + k) * measured.
+    pub scale_initial: f64,
+    /// Initial 1-sigma of k [-]; 0 = not estimated.
+    pub scale_std: f64,
+    /// Random-walk PSD of k [1/s] (tyre wear, load; 0 = constant).
+    pub scale_random_walk: f64,
+    /// Also apply zero lateral/vertical velocity with each odometer speed (seed 004's
+    /// 3-row measurement v^m = [v 0 0]) when the NHC is otherwise off.
+    pub with_nhc: bool,
+    /// Innovation test probability (1 dof); None = no gate.
+    pub gate_probability: Option<f64>,
+}
+
+impl Default for OdometerOptions {
+    fn default() -> Self {
+        OdometerOptions {
+            enabled: false,
+            std_mps: 0.05,
+            scale_initial: 0.0,
+            scale_std: 0.01,
+            scale_random_walk: 0.0,
+            with_nhc: false,
+            gate_probability: Some(1e-4),
+        }
+    }
+}
+
+/// Heading from GNSS (SYSTEM.md §3c; seed 001 eq. 10-11).
+#[derive(Clone, Debug, PartialEq)]
+pub struct HeadingOptions {
+    /// Dual-antenna heading input: the baseline from the primary to the secondary
+    /// antenna in the IMU frame (direction only matters) [m]; None = not used.
+    pub baseline_b: Option<Vector3<f64>>,
+    /// Replace the input's per-epoch heading std [rad].
+    pub dual_antenna_std_override: Option<f64>,
+    /// Course over ground as the heading of the vehicle's forward axis, from each fix's
+    /// velocity (or from consecutive fixes without velocity).
+    pub course_over_ground: bool,
+    /// Course is used only at or above this horizontal speed [m/s].
+    pub course_min_speed_mps: f64,
+    /// Course noise floor [rad] (sideslip, antenna lever arm in turns); the velocity
+    /// noise adds sigma_v / speed on top (seed 001: noise grows as speed falls).
+    pub course_std_floor: f64,
+    /// Innovation test probability (1 dof); None = no gate.
+    pub gate_probability: Option<f64>,
+}
+
+impl Default for HeadingOptions {
+    fn default() -> Self {
+        HeadingOptions {
+            baseline_b: None,
+            dual_antenna_std_override: None,
+            course_over_ground: false,
+            course_min_speed_mps: 5.0,
+            course_std_floor: 1.0_f64.to_radians(),
+            gate_probability: Some(1e-4),
+        }
+    }
+}
+
+/// Zero-velocity and zero-angular-rate updates with automatic static detection.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ZuptOptions {
+    pub enabled: bool,
+    /// Detection window [s]: the vehicle is static when, over the window, the standard
+    /// deviation of the specific-force vector is below `accel_std_max`, the standard
+    /// deviation of the angular rate is below `gyro_max` (deviations, not means, so a
+    /// gyro turn-on bias does not matter), and (when an odometer is used) its speed is
+    /// zero (static_detect.rs).
+    pub window_s: f64,
+    /// [m/s²].
+    pub accel_std_max: f64,
+    /// Angular-rate standard deviation threshold [rad/s].
+    pub gyro_max: f64,
+    /// Update rate while static [Hz].
+    pub rate_hz: f64,
+    /// 1-sigma of the zero-velocity pseudo-measurement [m/s].
+    pub velocity_std_mps: f64,
+    /// 1-sigma of the zero-angular-rate pseudo-measurement on the window mean [rad/s];
+    /// 0 = no ZARU.
+    pub angular_rate_std: f64,
+    /// A standstill is only declared while the INS speed and the speed of the latest
+    /// GNSS fix (within 2 s) are below this [m/s]: constant-velocity straight driving
+    /// looks static to an IMU without vibration (e.g. in simulation).
+    pub max_speed_mps: f64,
+}
+
+impl Default for ZuptOptions {
+    fn default() -> Self {
+        ZuptOptions {
+            enabled: false,
+            window_s: 1.0,
+            accel_std_max: 0.05,
+            gyro_max: 0.5_f64.to_radians(),
+            rate_hz: 5.0,
+            velocity_std_mps: 0.01,
+            angular_rate_std: 0.01_f64.to_radians(),
+            max_speed_mps: 1.0,
+        }
+    }
+}
+
 /// Everything the navigator needs besides the data.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NavConfig {
@@ -131,6 +325,11 @@ pub struct NavConfig {
     pub initial: InitialState,
     pub gnss: GnssOptions,
     pub filter: FilterOptions,
+    pub vehicle: VehicleOptions,
+    pub nhc: NhcOptions,
+    pub odometer: OdometerOptions,
+    pub heading: HeadingOptions,
+    pub zupt: ZuptOptions,
     /// Start time [s]; IMU data before it are skipped.
     pub start_time: f64,
     /// End time [s]; None = to the end of the data.

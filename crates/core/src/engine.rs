@@ -1,23 +1,32 @@
 //! The navigator: nominal INS state, closed-loop error-state filter and the time
 //! loop that interleaves IMU intervals with aiding measurements.
 //!
-//! Time handling: a GNSS epoch that falls inside an IMU interval splits it (the
+//! Time handling: a measurement that falls inside an IMU interval splits it (the
 //! increments are shared in proportion to time), so the update happens exactly at
-//! the epoch (SYSTEM.md §1, seed 000 eq. 31-32). The covariance is propagated every
+//! its epoch (SYSTEM.md §1, seed 000 eq. 31-32). The covariance is propagated every
 //! `covariance_period_s` (and always right before an update) with the transition
 //! matrix built from the mean specific force and rate over that span.
+//!
+//! Per IMU sample, after propagation, the vehicle constraints run at their own rates:
+//! static detection with zero-velocity / zero-angular-rate updates, and the
+//! non-holonomic constraint while moving (aiding/nhc.rs, aiding/zero_velocity.rs).
 
-use crate::aiding::{Aiding, AidingContext};
+use crate::aiding::heading::HeadingAxis;
+use crate::aiding::{Aiding, AidingContext, VehicleEstimate};
 use crate::alignment;
-use crate::attitude::{c_bn_from_euler, euler_from_q_bn, q_bn_from_euler, quat_from_rotvec};
-use crate::config::{AttitudeInit, NavConfig};
-use crate::earth::lla_add_ned;
+use crate::attitude::{
+    c_bn_from_euler, euler_from_c_bn, euler_from_q_bn, q_bn_from_euler, quat_from_rotvec,
+};
+use crate::config::{AttitudeInit, NavConfig, NhcMode};
+use crate::earth::{lla_add_ned, lla_diff_ned};
 use crate::error_model::{fill_f, fill_qc, Discretizer, MeanMotion};
 use crate::filter::{chi2_threshold, Eskf, UpdateOutcome};
 use crate::mechanization::Mechanizer;
 use crate::state::{Block, StateLayout, ATT, BA, BG, N_INS, POS, SA, SG, VEL};
-use crate::types::{GnssFix, ImuErrors, ImuSample, NavState};
-use nalgebra::{DMatrix, DVector, Vector3};
+use crate::static_detect::StaticDetector;
+use crate::types::{GnssFix, HeadingObs, ImuErrors, ImuSample, Measurement, NavState};
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+use std::collections::{BTreeMap, VecDeque};
 
 /// Something worth telling the user about, with its time.
 #[derive(Clone, Debug, PartialEq)]
@@ -33,6 +42,14 @@ pub enum Event {
     Singular { t: f64, source: &'static str },
     /// Fixes had been rejected for `streak_s` seconds; this one was used ungated.
     GateBypassed { t: f64, streak_s: f64 },
+    /// How the initial attitude was found.
+    Aligned {
+        t: f64,
+        method: &'static str,
+        rpy_deg: [f64; 3],
+    },
+    /// The vehicle came to rest / started moving (static detector).
+    Static { t: f64, begins: bool },
 }
 
 impl std::fmt::Display for Event {
@@ -49,6 +66,18 @@ impl std::fmt::Display for Event {
                 f,
                 "{t:.3} gnss fix used without the gate: fixes rejected for {streak_s:.1} s (gate timeout)"
             ),
+            Event::Aligned { t, method, rpy_deg } => write!(
+                f,
+                "{t:.3} aligned ({method}): roll {:.3} pitch {:.3} yaw {:.3} deg",
+                rpy_deg[0], rpy_deg[1], rpy_deg[2]
+            ),
+            Event::Static { t, begins } => {
+                if *begins {
+                    write!(f, "{t:.3} static: zero-velocity updates start")
+                } else {
+                    write!(f, "{t:.3} moving: zero-velocity updates stop")
+                }
+            }
         }
     }
 }
@@ -65,10 +94,20 @@ pub struct RunSummary {
     pub gnss_before_start: usize,
     pub outputs: usize,
     pub events: Vec<Event>,
+    /// Per aiding source (Aiding::name): updates applied and rejected by their test.
+    pub aiding_used: BTreeMap<&'static str, usize>,
+    pub aiding_rejected: BTreeMap<&'static str, usize>,
+    /// Time spent static according to the detector [s].
+    pub static_s: f64,
     /// Final GNSS-IMU time offset at `last_t` and its 1-sigma [s], when estimated.
     pub time_offset: Option<(f64, f64)>,
     /// Final time-offset rate and its 1-sigma [s/s], when estimated.
     pub time_offset_rate: Option<(f64, f64)>,
+    /// Final odometer scale k and its 1-sigma, when estimated.
+    pub odometer_scale: Option<(f64, f64)>,
+    /// Final IMU mounting roll, pitch, yaw [rad] and 1-sigma of pitch and yaw, when
+    /// estimated.
+    pub mounting: Option<(Vector3<f64>, [f64; 2])>,
 }
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -77,6 +116,16 @@ struct Accum {
     dv_f_n: Vector3<f64>,
     dtheta: Vector3<f64>,
     dvel: Vector3<f64>,
+}
+
+/// What a fusion attempt did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Fused {
+    Applied,
+    Rejected,
+    Singular,
+    /// The source had nothing to offer (e.g. a fix without velocity).
+    NotApplicable,
 }
 
 /// Nominal state + error covariance + mechanization history.
@@ -88,6 +137,7 @@ pub struct Navigator {
     mech: Mechanizer,
     nav: NavState,
     imu_errors: ImuErrors,
+    vehicle: VehicleEstimate,
     time_offset_s: f64,
     time_offset_rate: f64,
     acc: Accum,
@@ -97,13 +147,41 @@ pub struct Navigator {
     gate3: Option<f64>,
     /// Time of the first of the current run of gate-rejected fixes.
     reject_streak_since: Option<f64>,
+    /// Time of the last GNSS fix used (GNSS time) for the NHC outage mode.
+    last_gnss_used_t: f64,
+    /// Previous fix (course from displacement when fixes carry no velocity).
+    prev_fix: Option<GnssFix>,
+    detector: StaticDetector,
+    is_static: bool,
+    /// Last time the odometer reported motion (IMU time).
+    odo_moving_t: f64,
+    /// Last time a GNSS fix reported a speed above `zupt.max_speed_mps` (GNSS time).
+    gnss_moving_t: f64,
+    next_nhc_t: f64,
+    next_zupt_t: f64,
     summary: RunSummary,
+}
+
+/// Chi-square gate for `dof` rows at tail probability `p`.
+fn chi2_gate(dof: usize, p: Option<f64>) -> Option<f64> {
+    p.map(|p| chi2_threshold(dof, p))
 }
 
 impl Navigator {
     /// Initialise at time `t0` with position `lla` (IMU centre) and attitude `rpy`
-    /// [rad]; the rest (velocity, IMU errors, uncertainties) from `cfg.initial`.
+    /// [rad]; velocity, IMU errors and uncertainties from `cfg.initial`.
     pub fn new(cfg: &NavConfig, t0: f64, lla: Vector3<f64>, rpy: Vector3<f64>) -> Self {
+        Self::with_velocity(cfg, t0, lla, rpy, cfg.initial.v_n)
+    }
+
+    /// As [`Navigator::new`] with an initial NED velocity [m/s].
+    pub fn with_velocity(
+        cfg: &NavConfig,
+        t0: f64,
+        lla: Vector3<f64>,
+        rpy: Vector3<f64>,
+        v_n: Vector3<f64>,
+    ) -> Self {
         let mut layout = StateLayout::ins21();
         if let Some(to) = cfg.filter.time_offset {
             if to.std_s > 0.0 {
@@ -112,6 +190,13 @@ impl Navigator {
                     layout.push(Block::TimeOffsetRate);
                 }
             }
+        }
+        let odo = &cfg.odometer;
+        if odo.enabled && odo.scale_std > 0.0 {
+            layout.push(Block::OdometerScale);
+        }
+        if cfg.vehicle.mounting_std > 0.0 && (odo.enabled || cfg.nhc.mode != NhcMode::Off) {
+            layout.push(Block::Mounting);
         }
         let n = layout.len();
         let ini = &cfg.initial;
@@ -137,13 +222,20 @@ impl Navigator {
                 p0[i] = to.rate_std.powi(2);
             }
         }
+        if let Some(i) = layout.index(Block::OdometerScale) {
+            p0[i] = odo.scale_std.powi(2);
+        }
+        if let Some(i) = layout.index(Block::Mounting) {
+            p0[i] = cfg.vehicle.mounting_std.powi(2);
+            p0[i + 1] = cfg.vehicle.mounting_std.powi(2);
+        }
         let nav = NavState {
             t: t0,
             lla,
-            v_n: ini.v_n,
+            v_n,
             q_bn: q_bn_from_euler(&rpy),
         };
-        let gate3 = cfg.gnss.gate_probability.map(|p| chi2_threshold(3, p));
+        let gate3 = chi2_gate(3, cfg.gnss.gate_probability);
         Navigator {
             cfg: cfg.clone(),
             filter: Eskf::new(DMatrix::from_diagonal(&p0)),
@@ -152,6 +244,11 @@ impl Navigator {
             mech: Mechanizer::new(),
             nav,
             imu_errors: ini.imu_errors,
+            vehicle: VehicleEstimate {
+                c_bm: c_bn_from_euler(&cfg.vehicle.mounting_rpy),
+                lever_arm_b: cfg.vehicle.lever_arm_b,
+                odometer_scale: odo.scale_initial,
+            },
             time_offset_s,
             time_offset_rate,
             acc: Accum::default(),
@@ -159,6 +256,14 @@ impl Navigator {
             a_n: Vector3::zeros(),
             gate3,
             reject_streak_since: None,
+            last_gnss_used_t: t0,
+            prev_fix: None,
+            detector: StaticDetector::new(cfg.zupt.window_s),
+            is_static: false,
+            odo_moving_t: f64::NEG_INFINITY,
+            gnss_moving_t: f64::NEG_INFINITY,
+            next_nhc_t: t0,
+            next_zupt_t: t0,
             summary: RunSummary {
                 first_t: t0,
                 last_t: t0,
@@ -181,6 +286,16 @@ impl Navigator {
 
     pub fn covariance(&self) -> &DMatrix<f64> {
         &self.filter.p
+    }
+
+    /// Current installation estimates (mounting C_b^m, odometer scale).
+    pub fn vehicle(&self) -> &VehicleEstimate {
+        &self.vehicle
+    }
+
+    /// True while the static detector sees the vehicle at rest.
+    pub fn is_static(&self) -> bool {
+        self.is_static
     }
 
     /// Current GNSS-IMU time offset estimate [s] (0 when not estimated): a GNSS
@@ -222,6 +337,10 @@ impl Navigator {
         if s.dt > 0.0 {
             self.w_ib_b = s.dtheta / s.dt;
             self.a_n = (self.nav.v_n - v_before) / s.dt;
+            if self.cfg.zupt.enabled {
+                self.detector
+                    .push(s.t, s.dt, &(s.dvel / s.dt), &self.w_ib_b);
+            }
         }
         self.acc.dt += s.dt;
         self.acc.dv_f_n += info.dv_f_n;
@@ -243,7 +362,13 @@ impl Navigator {
             f_b: a.dvel / a.dt,
             w_b: a.dtheta / a.dt,
         };
-        let rw = self.cfg.filter.time_offset.map_or(0.0, |t| t.random_walk);
+        let rw = [
+            (
+                Block::TimeOffset,
+                self.cfg.filter.time_offset.map_or(0.0, |t| t.random_walk),
+            ),
+            (Block::OdometerScale, self.cfg.odometer.scale_random_walk),
+        ];
         fill_f(
             &mut self.disc.f,
             &self.layout,
@@ -256,15 +381,17 @@ impl Navigator {
             &self.layout,
             &self.nav,
             &self.cfg.imu_noise,
-            rw,
+            &rw,
         );
         self.disc.discretize(a.dt);
         self.filter.predict(&self.disc.phi, &self.disc.qd);
         self.acc = Accum::default();
     }
 
-    /// Fuse one aiding measurement; returns true when it was applied.
-    pub fn fuse(&mut self, aiding: Aiding, gate: Option<f64>) -> bool {
+    /// Fuse one aiding measurement with an optional chi-square gate (threshold on
+    /// the normalised innovation squared). Counts it per source; rejections of
+    /// external measurements (GNSS, heading) are also logged as events.
+    pub fn fuse(&mut self, aiding: Aiding, gate: Option<f64>) -> Fused {
         self.flush_covariance();
         let ctx = AidingContext {
             nav: &self.nav,
@@ -272,30 +399,41 @@ impl Navigator {
             w_ib_b: self.w_ib_b,
             a_n: self.a_n,
             lever_arm_b: self.cfg.gnss.lever_arm_b,
+            vehicle: self.vehicle,
         };
         let Some(lin) = aiding.linearize(&ctx) else {
-            return false;
+            return Fused::NotApplicable;
         };
+        let logged = matches!(
+            aiding,
+            Aiding::GnssPosition(_) | Aiding::GnssVelocity(_) | Aiding::Heading(..)
+        );
+        let name = aiding.name();
         match self.filter.update(&lin.y, &lin.h, &lin.r, gate) {
             UpdateOutcome::Applied { dx, .. } => {
                 self.feedback(&dx);
-                true
+                *self.summary.aiding_used.entry(name).or_default() += 1;
+                Fused::Applied
             }
             UpdateOutcome::Rejected { nis, threshold } => {
-                self.summary.events.push(Event::Rejected {
-                    t: self.time_gnss(),
-                    source: aiding.name(),
-                    nis,
-                    threshold,
-                });
-                false
+                *self.summary.aiding_rejected.entry(name).or_default() += 1;
+                if logged {
+                    self.summary.events.push(Event::Rejected {
+                        t: self.time_gnss(),
+                        source: name,
+                        nis,
+                        threshold,
+                    });
+                }
+                Fused::Rejected
             }
             UpdateOutcome::Singular => {
+                *self.summary.aiding_rejected.entry(name).or_default() += 1;
                 self.summary.events.push(Event::Singular {
                     t: self.time_gnss(),
-                    source: aiding.name(),
+                    source: name,
                 });
-                false
+                Fused::Singular
             }
         }
     }
@@ -325,6 +463,15 @@ impl Navigator {
         if let Some(i) = self.layout.index(Block::TimeOffsetRate) {
             self.time_offset_rate -= dx[i];
         }
+        if let Some(i) = self.layout.index(Block::OdometerScale) {
+            self.vehicle.odometer_scale -= dx[i];
+        }
+        if let Some(i) = self.layout.index(Block::Mounting) {
+            // C_b^m,true = (I + dalpha x) C_b^m,est, dalpha = (0, pitch, yaw).
+            let da = Vector3::new(0.0, dx[i], dx[i + 1]);
+            self.vehicle.c_bm =
+                quat_from_rotvec(&da).to_rotation_matrix().into_inner() * self.vehicle.c_bm;
+        }
     }
 
     /// Current GNSS-IMU time offset rate [s/s].
@@ -332,8 +479,52 @@ impl Navigator {
         self.time_offset_rate
     }
 
-    /// Loosely coupled GNSS update: position, then velocity if present and enabled.
+    /// Fuse one time-tagged input (already reached in time).
+    pub fn apply(&mut self, m: &Measurement) {
+        match m {
+            Measurement::Gnss(fix) => self.update_gnss(fix),
+            Measurement::Odometer(o) => {
+                if o.speed_mps.abs() > 1e-3 {
+                    self.odo_moving_t = self.nav.t;
+                }
+                let c = &self.cfg.odometer;
+                if !c.enabled {
+                    return;
+                }
+                let nhc_std = (c.with_nhc && self.cfg.nhc.mode == NhcMode::Off)
+                    .then_some(self.cfg.nhc.std_mps);
+                let rows = if nhc_std.is_some() { 3 } else { 1 };
+                let aiding = Aiding::Odometer {
+                    speed_mps: o.speed_mps,
+                    std_mps: c.std_mps,
+                    nhc_std,
+                };
+                self.fuse(aiding, chi2_gate(rows, c.gate_probability));
+            }
+            Measurement::Heading(h) => {
+                let c = &self.cfg.heading;
+                let Some(b) = c.baseline_b else {
+                    return;
+                };
+                let mut obs = *h;
+                if let Some(s) = c.dual_antenna_std_override {
+                    obs.std_rad = s;
+                }
+                let g = chi2_gate(1, c.gate_probability);
+                self.fuse(Aiding::Heading(&obs, HeadingAxis::Body(b)), g);
+            }
+        }
+    }
+
+    /// Loosely coupled GNSS update: position, then velocity if present and enabled,
+    /// then the course over ground as heading when configured.
     pub fn update_gnss(&mut self, fix: &GnssFix) {
+        if fix
+            .vel_ned
+            .is_some_and(|v| v.norm() > self.cfg.zupt.max_speed_mps)
+        {
+            self.gnss_moving_t = fix.t;
+        }
         let mut f = *fix;
         let g = &self.cfg.gnss;
         if let Some(s) = g.position_std_override {
@@ -353,22 +544,106 @@ impl Navigator {
                 });
             }
         }
-        let n_events = self.summary.events.len();
-        let used = self.fuse(Aiding::GnssPosition(&f), gate);
+        let used = self.fuse(Aiding::GnssPosition(&f), gate) == Fused::Applied;
         if used {
             self.summary.gnss_used += 1;
             self.reject_streak_since = None;
+            self.last_gnss_used_t = fix.t;
         } else {
             self.summary.gnss_rejected += 1;
-            let gated = self.summary.events[n_events..]
-                .iter()
-                .any(|e| matches!(e, Event::Rejected { .. }));
-            if gated {
+            if gate.is_some() {
                 self.reject_streak_since.get_or_insert(fix.t);
             }
         }
         if use_vel && f.vel_ned.is_some() {
             self.fuse(Aiding::GnssVelocity(&f), gate);
+        }
+        if self.cfg.heading.course_over_ground && used {
+            if let Some(obs) = self.course_from(&f) {
+                let g = chi2_gate(1, self.cfg.heading.gate_probability);
+                self.fuse(Aiding::Heading(&obs, HeadingAxis::VehicleForward), g);
+            }
+        }
+        self.prev_fix = Some(f);
+    }
+
+    /// Course over ground from the fix velocity, or from the displacement since the
+    /// previous fix (seed 001 eq. 11), when fast enough; its std grows as the speed
+    /// falls: sqrt(floor² + (sigma_v / v)²).
+    fn course_from(&self, f: &GnssFix) -> Option<HeadingObs> {
+        let c = &self.cfg.heading;
+        let (v_ne, sigma_v) = match (f.vel_ned, f.vel_std_ned) {
+            (Some(v), s) => (
+                (v.x, v.y),
+                s.map_or(0.1, |s| s.x.hypot(s.y) / std::f64::consts::SQRT_2),
+            ),
+            (None, _) => {
+                let p = self.prev_fix?;
+                let dt = f.t - p.t;
+                if !(dt > 0.0 && dt <= 2.0) {
+                    return None;
+                }
+                let d = lla_diff_ned(&f.lla, &p.lla);
+                let sp = (f.std_ned.x.hypot(f.std_ned.y) + p.std_ned.x.hypot(p.std_ned.y)) / 2.0;
+                ((d.x / dt, d.y / dt), sp / dt)
+            }
+        };
+        let speed = v_ne.0.hypot(v_ne.1);
+        if speed < c.course_min_speed_mps {
+            return None;
+        }
+        Some(HeadingObs {
+            t: f.t,
+            heading_rad: v_ne.1.atan2(v_ne.0),
+            std_rad: c.course_std_floor.hypot(sigma_v / speed),
+        })
+    }
+
+    /// Vehicle constraints due after the IMU sample that ended at the current time:
+    /// static detection with ZUPT/ZARU, then the NHC while moving.
+    pub fn apply_constraints(&mut self) {
+        let t = self.nav.t;
+        let z = self.cfg.zupt.clone();
+        if z.enabled {
+            // Vetoes: the odometer or a recent GNSS fix saw motion, or the INS is fast.
+            let odo_still = !self.cfg.odometer.enabled || t - self.odo_moving_t > z.window_s;
+            let gnss_still = self.time_gnss() - self.gnss_moving_t > 2.0;
+            let slow = self.nav.v_n.norm() < z.max_speed_mps;
+            let w = self
+                .detector
+                .static_mean_rate(z.accel_std_max, z.gyro_max)
+                .filter(|_| odo_still && gnss_still && slow);
+            if w.is_some() != self.is_static {
+                self.is_static = w.is_some();
+                self.summary.events.push(Event::Static {
+                    t: self.time_gnss(),
+                    begins: self.is_static,
+                });
+            }
+            if let Some(w) = w {
+                if t >= self.next_zupt_t - 1e-9 {
+                    let dt = 1.0 / z.rate_hz;
+                    self.summary.static_s += dt;
+                    self.next_zupt_t = t + dt;
+                    self.fuse(Aiding::Zupt(z.velocity_std_mps), None);
+                    if z.angular_rate_std > 0.0 {
+                        self.fuse(Aiding::Zaru(w, z.angular_rate_std), None);
+                    }
+                }
+            }
+        }
+        let c = &self.cfg.nhc;
+        let due = match c.mode {
+            NhcMode::Off => false,
+            NhcMode::Always => true,
+            NhcMode::DuringOutage => self.time_gnss() - self.last_gnss_used_t >= c.outage_after_s,
+        };
+        if due && !self.is_static && t >= self.next_nhc_t - 1e-9 {
+            self.next_nhc_t = t + 1.0 / c.rate_hz;
+            if self.nav.v_n.norm() >= c.min_speed_mps {
+                let g = chi2_gate(2, c.gate_probability);
+                self.fuse(Aiding::Nhc(c.std_mps), g);
+            }
         }
     }
 
@@ -391,6 +666,24 @@ impl Navigator {
     pub fn rpy(&self) -> Vector3<f64> {
         euler_from_q_bn(&self.nav.q_bn)
     }
+
+    fn finish_summary(&mut self) {
+        if let Some(i) = self.layout.index(Block::TimeOffset) {
+            self.summary.time_offset = Some((self.time_offset_s, self.filter.std(i)));
+        }
+        if let Some(i) = self.layout.index(Block::TimeOffsetRate) {
+            self.summary.time_offset_rate = Some((self.time_offset_rate, self.filter.std(i)));
+        }
+        if let Some(i) = self.layout.index(Block::OdometerScale) {
+            self.summary.odometer_scale = Some((self.vehicle.odometer_scale, self.filter.std(i)));
+        }
+        if let Some(i) = self.layout.index(Block::Mounting) {
+            self.summary.mounting = Some((
+                euler_from_c_bn(&self.vehicle.c_bm),
+                [self.filter.std(i), self.filter.std(i + 1)],
+            ));
+        }
+    }
 }
 
 /// Why a run could not start or had to stop (no initial pose, numerical failure).
@@ -405,123 +698,340 @@ impl std::fmt::Display for NavError {
 
 impl std::error::Error for NavError {}
 
-/// Initial position and attitude from the configuration, or found from the data
-/// (levelling window `window`, GNSS course, first GNSS fix). SYSTEM.md §1.
-/// Also returns the time of the GNSS fix used as the initial position, if any (that
-/// fix is then not used again as a measurement).
-pub fn initial_pose(
-    cfg: &NavConfig,
+/// Where and how the navigation starts.
+struct Start {
     t0: f64,
-    window: &[ImuSample],
-    gnss: &[GnssFix],
-) -> Result<(Vector3<f64>, Vector3<f64>, Option<f64>), NavError> {
-    let rpy = match cfg.initial.attitude {
-        AttitudeInit::Given(rpy) => rpy,
-        AttitudeInit::LevelAndGnssCourse { min_speed_mps, .. } => {
-            let compensated: Vec<ImuSample> = window
-                .iter()
-                .map(|s| cfg.initial.imu_errors.compensate(s))
-                .collect();
-            let (f_b, _) = alignment::mean_motion(&compensated).ok_or_else(|| {
-                NavError("alignment: no IMU samples in the levelling window".into())
-            })?;
-            let (roll, pitch) = alignment::level(&f_b);
-            let (_, yaw) = alignment::first_course(gnss, t0, min_speed_mps).ok_or_else(|| {
-                NavError(format!(
-                    "alignment: no GNSS epoch after t = {t0:.3} with a horizontal speed of at least {min_speed_mps} m/s, so the initial yaw is unknown (give initial.attitude_deg)"
-                ))
-            })?;
-            Vector3::new(roll, pitch, yaw)
-        }
-    };
-    let mut fix_used = None;
-    let lla = match cfg.initial.lla {
-        Some(lla) => lla,
-        None => {
-            let fix = gnss.iter().find(|f| f.t >= t0 - 0.5).ok_or_else(|| {
-                NavError(format!(
-                    "no initial position given and no GNSS fix at or after t = {t0:.3}"
-                ))
-            })?;
-            let l_n = c_bn_from_euler(&rpy) * cfg.gnss.lever_arm_b;
-            fix_used = Some(fix.t);
-            lla_add_ned(&fix.lla, &(-l_n))
-        }
-    };
-    Ok((lla, rpy, fix_used))
+    lla: Vector3<f64>,
+    rpy: Vector3<f64>,
+    v_n: Vector3<f64>,
+    /// IMU samples read during alignment that are navigated after the start.
+    replay: Vec<ImuSample>,
+    /// Measurements at or before this GNSS time are not used (the fix that gave the
+    /// initial position, fixes before the start).
+    used_until: f64,
+    method: &'static str,
 }
 
-/// Run the navigator over an IMU stream and a time-sorted list of GNSS fixes.
+/// GNSS fixes as a plain list, for the alignment routines.
+fn fixes_of(meas: &[Measurement]) -> Vec<GnssFix> {
+    meas.iter()
+        .filter_map(|m| match m {
+            Measurement::Gnss(f) => Some(*f),
+            _ => None,
+        })
+        .collect()
+}
+
+/// Initial position from the config, or from the first fix at or after `t0`
+/// (moved from the antenna to the IMU centre with the attitude `c_bn`).
+fn initial_position(
+    cfg: &NavConfig,
+    t0: f64,
+    fixes: &[GnssFix],
+    c_bn: &Matrix3<f64>,
+) -> Result<(Vector3<f64>, Option<f64>), NavError> {
+    if let Some(lla) = cfg.initial.lla {
+        return Ok((lla, None));
+    }
+    let fix = fixes.iter().find(|f| f.t >= t0 - 0.5).ok_or_else(|| {
+        NavError(format!(
+            "no initial position given and no GNSS fix at or after t = {t0:.3}"
+        ))
+    })?;
+    Ok((
+        lla_add_ned(&fix.lla, &(-(c_bn * cfg.gnss.lever_arm_b))),
+        Some(fix.t),
+    ))
+}
+
+/// Static start over the buffered `window`: levelling, yaw by gyrocompassing or from
+/// the first GNSS course. SYSTEM.md §1 "Initial alignment".
+fn static_start(
+    cfg: &NavConfig,
+    t0: f64,
+    window: Vec<ImuSample>,
+    fixes: &[GnssFix],
+    gyrocompass: bool,
+    min_speed_mps: f64,
+) -> Result<Start, NavError> {
+    let used = &window[..window.len().saturating_sub(1)];
+    let compensated: Vec<ImuSample> = used
+        .iter()
+        .map(|s| cfg.initial.imu_errors.compensate(s))
+        .collect();
+    let (f_b, w_b) = alignment::mean_motion(&compensated)
+        .ok_or_else(|| NavError("alignment: no IMU samples in the levelling window".into()))?;
+    let (roll, pitch) = alignment::level(&f_b);
+    let (yaw, method) = if gyrocompass {
+        (
+            alignment::gyrocompass_yaw(&w_b, roll, pitch),
+            "static levelling + gyrocompassing",
+        )
+    } else {
+        let (_, course) = alignment::first_course(fixes, t0, min_speed_mps).ok_or_else(|| {
+            NavError(format!(
+                "alignment: no GNSS epoch after t = {t0:.3} with a horizontal speed of at least {min_speed_mps} m/s, so the initial yaw is unknown (give initial.attitude_deg)"
+            ))
+        })?;
+        // The course is the vehicle's; the IMU yaw differs by the mounting yaw.
+        let c_mn = c_bn_from_euler(&Vector3::new(0.0, 0.0, course));
+        let yaw = euler_from_c_bn(&(c_mn * c_bn_from_euler(&cfg.vehicle.mounting_rpy))).z;
+        (yaw, "static levelling + first GNSS course")
+    };
+    let rpy = Vector3::new(roll, pitch, yaw);
+    let (lla, fix_t) = initial_position(cfg, t0, fixes, &c_bn_from_euler(&rpy))?;
+    Ok(Start {
+        t0,
+        lla,
+        rpy,
+        v_n: cfg.initial.v_n,
+        replay: window,
+        used_until: fix_t.unwrap_or(f64::NEG_INFINITY),
+        method,
+    })
+}
+
+/// In-motion alignment: find the first fix (with a predecessor at most 2 s before)
+/// whose horizontal speed is at least `min_speed_mps`, consume the IMU stream up to
+/// it, and start there with the GNSS velocity, the course as vehicle yaw and roll /
+/// pitch from the acceleration-corrected specific force (alignment::in_motion_attitude).
+fn in_motion_start<E: From<NavError>>(
+    cfg: &NavConfig,
+    mut buffered: VecDeque<ImuSample>,
+    imu: &mut impl Iterator<Item = Result<ImuSample, E>>,
+    fixes: &[GnssFix],
+    min_speed_mps: f64,
+) -> Result<Option<Start>, E> {
+    // Velocity of fix k: its own, or the displacement from the previous fix.
+    let vel = |k: usize| -> Option<Vector3<f64>> {
+        fixes[k].vel_ned.or_else(|| {
+            let p = fixes.get(k.checked_sub(1)?)?;
+            let dt = fixes[k].t - p.t;
+            (dt > 0.0 && dt <= 2.0).then(|| lla_diff_ned(&fixes[k].lla, &p.lla) / dt)
+        })
+    };
+    let t_first = buffered.front().map_or(f64::NEG_INFINITY, |s| s.t);
+    let mut candidates = (1..fixes.len()).filter(|&k| {
+        let dt = fixes[k].t - fixes[k - 1].t;
+        fixes[k - 1].t >= t_first
+            && dt > 0.0
+            && dt <= 2.0
+            && vel(k).is_some_and(|v| v.x.hypot(v.y) >= min_speed_mps)
+            && vel(k - 1).is_some()
+    });
+    let Some(k) = candidates.next() else {
+        return Err(NavError(format!(
+            "in-motion alignment: no pair of GNSS epochs at most 2 s apart with a horizontal speed of at least {min_speed_mps} m/s (give initial.attitude_deg, or align while static)"
+        ))
+        .into());
+    };
+    let (fa, fb) = (fixes[k - 1], fixes[k]);
+    // Read the IMU up to the aligning epoch; keep the samples since the previous fix.
+    let mut kept: Vec<ImuSample> = Vec::new();
+    let s0 = loop {
+        let s = match buffered.pop_front() {
+            Some(s) => s,
+            None => match imu.next() {
+                Some(r) => r?,
+                None => return Ok(None),
+            },
+        };
+        if s.t >= fb.t - 1e-9 {
+            break s;
+        }
+        if s.t - s.dt >= fa.t - 1e-9 {
+            kept.push(s);
+        }
+    };
+    let compensated: Vec<ImuSample> = kept
+        .iter()
+        .map(|s| cfg.initial.imu_errors.compensate(s))
+        .collect();
+    let (va, vb) = (vel(k - 1).expect("filtered"), vel(k).expect("filtered"));
+    let a_n = (vb - va) / (fb.t - fa.t);
+    let (f_b, _) = alignment::mean_motion(&compensated).ok_or_else(|| {
+        NavError(format!(
+            "in-motion alignment: no IMU samples between the GNSS epochs at {:.3} and {:.3}",
+            fa.t, fb.t
+        ))
+    })?;
+    let course = vb.y.atan2(vb.x);
+    let c_bm = c_bn_from_euler(&cfg.vehicle.mounting_rpy);
+    let c_bn = alignment::in_motion_attitude(course, &f_b, &a_n, &c_bm);
+    let rpy = euler_from_c_bn(&c_bn);
+    // Start at the IMU epoch s0.t: move the fix there with its velocity.
+    let dt = s0.t - fb.t;
+    let lla = match cfg.initial.lla {
+        Some(l) => l,
+        None => lla_add_ned(&fb.lla, &(vb * dt - c_bn * cfg.gnss.lever_arm_b)),
+    };
+    Ok(Some(Start {
+        t0: s0.t,
+        lla,
+        rpy,
+        v_n: vb + a_n * dt,
+        replay: Vec::new(),
+        used_until: fb.t,
+        method: "in motion (GNSS course, velocity and acceleration)",
+    }))
+}
+
+/// Run the navigator over an IMU stream and a time-sorted list of measurements
+/// (types::merge_measurements).
 ///
 /// `on_output` is called at every IMU epoch (`output_period_s = None`) or at the
 /// first epoch at or after each multiple of the period; `on_progress` every 8192
 /// samples with the current time. The first IMU sample at or after
 /// `cfg.start_time` fixes the initial epoch (its own interval is not integrated).
-/// With alignment, the samples of the levelling window are buffered, the initial
-/// attitude is computed, and the window is then navigated like any other data.
+/// With static alignment, the samples of the levelling window are buffered, the
+/// initial attitude is computed, and the window is then navigated like any other
+/// data; with in-motion alignment the run starts at the aligning GNSS epoch.
 pub fn run<E: From<NavError>>(
     cfg: &NavConfig,
     imu: impl Iterator<Item = Result<ImuSample, E>>,
-    gnss: &[GnssFix],
+    measurements: &[Measurement],
     output_period_s: Option<f64>,
     mut on_output: impl FnMut(&Navigator) -> Result<(), E>,
     mut on_progress: impl FnMut(f64),
 ) -> Result<RunSummary, E> {
     let end = cfg.end_time.unwrap_or(f64::INFINITY);
     let mut imu = imu.filter(|r| r.as_ref().map_or(true, |s| s.t >= cfg.start_time));
-    // Initial epoch and, for alignment, the levelling window.
     let first = match imu.next() {
         Some(r) => r?,
         None => return Ok(RunSummary::default()),
     };
     let t0 = first.t;
-    let mut window = Vec::new();
-    if let AttitudeInit::LevelAndGnssCourse { level_window_s, .. } = cfg.initial.attitude {
-        for r in imu.by_ref() {
+    let fixes = fixes_of(measurements);
+    let read_window = |imu: &mut dyn Iterator<Item = Result<ImuSample, E>>,
+                       len_s: f64|
+     -> Result<Vec<ImuSample>, E> {
+        let mut w = Vec::new();
+        for r in imu {
             let s = r?;
-            let full = s.t > t0 + level_window_s;
-            window.push(s);
+            let full = s.t > t0 + len_s;
+            w.push(s);
             if full {
                 break;
             }
         }
+        Ok(w)
+    };
+    let start = match cfg.initial.attitude {
+        AttitudeInit::Given(rpy) => {
+            let (lla, fix_t) = initial_position(cfg, t0, &fixes, &c_bn_from_euler(&rpy))?;
+            Start {
+                t0,
+                lla,
+                rpy,
+                v_n: cfg.initial.v_n,
+                replay: Vec::new(),
+                used_until: fix_t.unwrap_or(f64::NEG_INFINITY),
+                method: "given",
+            }
+        }
+        AttitudeInit::LevelAndGnssCourse {
+            level_window_s,
+            min_speed_mps,
+        } => {
+            let w = read_window(&mut imu, level_window_s)?;
+            static_start(cfg, t0, w, &fixes, false, min_speed_mps)?
+        }
+        AttitudeInit::StaticGyrocompass { level_window_s } => {
+            let w = read_window(&mut imu, level_window_s)?;
+            static_start(cfg, t0, w, &fixes, true, 0.0)?
+        }
+        AttitudeInit::InMotion { min_speed_mps } => {
+            let b = VecDeque::from([first]);
+            match in_motion_start(cfg, b, &mut imu, &fixes, min_speed_mps)? {
+                Some(s) => s,
+                None => return Ok(RunSummary::default()),
+            }
+        }
+        AttitudeInit::Auto {
+            level_window_s,
+            min_speed_mps,
+            gyrocompass,
+        } => {
+            let w = read_window(&mut imu, level_window_s)?;
+            let z = &cfg.zupt;
+            let mut det = StaticDetector::new(level_window_s);
+            for s in w.iter().map(|s| cfg.initial.imu_errors.compensate(s)) {
+                if s.dt > 0.0 {
+                    det.push(s.t, s.dt, &(s.dvel / s.dt), &(s.dtheta / s.dt));
+                }
+            }
+            if det.static_mean_rate(z.accel_std_max, z.gyro_max).is_some() {
+                static_start(cfg, t0, w, &fixes, gyrocompass, min_speed_mps)?
+            } else {
+                let mut b = VecDeque::from([first]);
+                b.extend(w);
+                match in_motion_start(cfg, b, &mut imu, &fixes, min_speed_mps)? {
+                    Some(s) => s,
+                    None => return Ok(RunSummary::default()),
+                }
+            }
+        }
+    };
+    let mut n = Navigator::with_velocity(cfg, start.t0, start.lla, start.rpy, start.v_n);
+    n.summary.events.push(Event::Aligned {
+        t: start.t0,
+        method: start.method,
+        rpy_deg: [
+            start.rpy.x.to_degrees(),
+            start.rpy.y.to_degrees(),
+            start.rpy.z.to_degrees(),
+        ],
+    });
+    let mut mi = 0usize;
+    // Inputs up to the initial epoch are not used.
+    let t_start = start.t0;
+    while mi < measurements.len() && {
+        let m = &measurements[mi];
+        let t_eff = m.t()
+            + if m.on_gnss_clock() {
+                n.time_offset()
+            } else {
+                0.0
+            };
+        t_eff <= t_start || (m.on_gnss_clock() && m.t() <= start.used_until)
+    } {
+        if matches!(measurements[mi], Measurement::Gnss(_)) {
+            n.summary.gnss_before_start += 1;
+        }
+        mi += 1;
     }
-    let (lla0, rpy0, fix_used) =
-        initial_pose(cfg, t0, &window[..window.len().saturating_sub(1)], gnss)?;
-    let mut n = Navigator::new(cfg, t0, lla0, rpy0);
-    let mut gi = 0usize;
-    // Fixes up to the initial epoch are not used.
-    while gi < gnss.len()
-        && (gnss[gi].t + n.time_offset() <= t0 || fix_used.is_some_and(|t| gnss[gi].t <= t))
-    {
-        gi += 1;
-    }
-    n.summary.gnss_before_start = gi;
-    let mut t_prev = t0 - n.time_offset();
+    let mut t_prev = t_start - n.time_offset();
     let period = output_period_s.filter(|p| *p > 0.0);
-    for item in window.into_iter().map(Ok).chain(imu) {
+    for item in start.replay.into_iter().map(Ok).chain(imu) {
         let s = item?;
         if s.t > end {
             break;
         }
         let mut rest = s;
-        while gi < gnss.len() {
-            let fix = &gnss[gi];
-            let t_fix = fix.t + n.time_offset();
-            if t_fix > s.t {
+        while mi < measurements.len() {
+            let m = &measurements[mi];
+            let t_m = m.t()
+                + if m.on_gnss_clock() {
+                    n.time_offset()
+                } else {
+                    0.0
+                };
+            if t_m > s.t {
                 break;
             }
-            gi += 1;
-            if cfg.gnss.outages.contains(fix.t) {
-                n.summary.gnss_in_outage += 1;
+            mi += 1;
+            if m.on_gnss_clock() && cfg.gnss.outages.contains(m.t()) {
+                if matches!(m, Measurement::Gnss(_)) {
+                    n.summary.gnss_in_outage += 1;
+                }
                 continue;
             }
             // Split the interval at the epoch unless it coincides with an end.
             let t_begin = rest.t - rest.dt;
-            if t_fix > t_begin + 1e-9 && t_fix < rest.t - 1e-9 {
-                let lambda = (t_fix - t_begin) / rest.dt;
+            if t_m > t_begin + 1e-9 && t_m < rest.t - 1e-9 {
+                let lambda = (t_m - t_begin) / rest.dt;
                 let first = ImuSample {
-                    t: t_fix,
+                    t: t_m,
                     dt: rest.dt * lambda,
                     dtheta: rest.dtheta * lambda,
                     dvel: rest.dvel * lambda,
@@ -533,20 +1043,18 @@ pub fn run<E: From<NavError>>(
                     dtheta: rest.dtheta - first.dtheta,
                     dvel: rest.dvel - first.dvel,
                 };
-                n.update_gnss(fix);
-            } else if t_fix >= rest.t - 1e-9 {
+            } else if t_m >= rest.t - 1e-9 {
                 n.propagate(&rest);
                 rest.dt = 0.0;
-                n.update_gnss(fix);
-            } else {
-                // At or before the start of this interval (e.g. after the time
-                // offset estimate moved): apply now.
-                n.update_gnss(fix);
             }
+            // Otherwise at or before the start of this interval (e.g. after the time
+            // offset estimate moved): apply now.
+            n.apply(m);
         }
         if rest.dt > 0.0 {
             n.propagate(&rest);
         }
+        n.apply_constraints();
         n.summary.imu_samples += 1;
         n.summary.last_t = s.t;
         if !n.nav_is_finite() || (n.summary.imu_samples % 256 == 0 && !n.covariance_is_finite()) {
@@ -571,12 +1079,7 @@ pub fn run<E: From<NavError>>(
         }
         t_prev = t_out;
     }
-    if let Some(i) = n.layout.index(Block::TimeOffset) {
-        n.summary.time_offset = Some((n.time_offset_s, n.filter.std(i)));
-    }
-    if let Some(i) = n.layout.index(Block::TimeOffsetRate) {
-        n.summary.time_offset_rate = Some((n.time_offset_rate, n.filter.std(i)));
-    }
+    n.finish_summary();
     Ok(n.summary.clone())
 }
 
@@ -629,6 +1132,11 @@ mod tests {
                 covariance_period_s: 0.0,
                 time_offset: None,
             },
+            vehicle: Default::default(),
+            nhc: Default::default(),
+            odometer: Default::default(),
+            heading: Default::default(),
+            zupt: Default::default(),
             start_time: f64::NEG_INFINITY,
             end_time: None,
         }
@@ -657,7 +1165,7 @@ mod tests {
         run::<NavError>(
             c,
             imu.iter().map(|s| Ok(*s)),
-            fixes,
+            &crate::types::merge_measurements(fixes, &[], &[]),
             None,
             |n| {
                 last = Some(*n.nav());
@@ -806,7 +1314,7 @@ mod tests {
         let s = run::<NavError>(
             &c,
             imu.iter().map(|s| Ok(*s)),
-            &fixes,
+            &crate::types::merge_measurements(&fixes, &[], &[]),
             None,
             |_| Ok(()),
             |_| {},

@@ -148,7 +148,7 @@ pub fn fill_qc(
     layout: &StateLayout,
     nav: &NavState,
     noise: &ImuNoise,
-    time_offset_rw: f64,
+    random_walks: &[(Block, f64)],
 ) {
     qc.as_mut_slice().fill(0.0);
     let c_bn = nav.q_bn.to_rotation_matrix().into_inner();
@@ -170,8 +170,13 @@ pub fn fill_qc(
         qc[(SG + k, SG + k)] = gm(noise.gyro_scale_std[k]);
         qc[(SA + k, SA + k)] = gm(noise.accel_scale_std[k]);
     }
-    if let Some(i) = layout.index(Block::TimeOffset) {
-        qc[(i, i)] = time_offset_rw;
+    // Random-walk PSDs of the appended blocks (time offset, odometer scale, ...).
+    for &(b, psd) in random_walks {
+        if let Some(i) = layout.index(b) {
+            for k in i..i + b.len() {
+                qc[(k, k)] = psd;
+            }
+        }
     }
 }
 

@@ -18,7 +18,11 @@ pub mod filter;
 pub mod mechanization;
 pub mod outage;
 pub mod state;
+pub mod static_detect;
 pub mod types;
 
 pub use engine::{run, Navigator, RunSummary};
-pub use types::{GnssFix, ImuErrors, ImuSample, NavState};
+pub use types::{
+    merge_measurements, GnssFix, HeadingObs, ImuErrors, ImuSample, Measurement, NavState,
+    OdometerSample,
+};

@@ -1,10 +1,13 @@
 //! Error-state layout. The 21 INS states come first in a fixed order; later aiding
-//! sources append their own blocks (time offset today; receiver clock, odometer
-//! scale and mounting later) without changing the filter.
+//! sources append their own blocks (time offset, odometer scale, mounting; the
+//! receiver clock later) without changing the filter.
 //!
-//! Error conventions (x_est - x_true): position error in NED metres, velocity error
-//! NED [m/s], attitude error phi with C_b^n,est = (I - phi x) C_b^n,true, sensor
-//! errors in SI (rad/s, m/s², unitless scale).
+//! Error conventions: position, velocity, attitude, time offset and vehicle states
+//! are x_est - x_true (position in NED metres, velocity NED [m/s], attitude phi with
+//! C_b^n,est = (I - phi x) C_b^n,true, mounting dalpha with C_b^m,est =
+//! (I - dalpha x) C_b^m,true, odometer scale dk); the twelve IMU error states are
+//! x_true - x_est (KF-GINS), added to the estimates at feedback, in SI units (rad/s,
+//! m/s², unitless scale).
 
 /// A named block of error states.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -20,12 +23,19 @@ pub enum Block {
     TimeOffset,
     /// Rate of the GNSS-to-IMU time offset [s/s].
     TimeOffsetRate,
+    /// Odometer scale-factor error dk [-] (SYSTEM.md §4b; seed 004 eq. 3).
+    OdometerScale,
+    /// IMU-to-vehicle mounting angle errors: pitch, yaw [rad] (seed 004 dalpha_p,
+    /// dalpha_y; roll about the forward axis is not observable from the vehicle
+    /// velocity and is not estimated).
+    Mounting,
 }
 
 impl Block {
     pub fn len(self) -> usize {
         match self {
-            Block::TimeOffset | Block::TimeOffsetRate => 1,
+            Block::TimeOffset | Block::TimeOffsetRate | Block::OdometerScale => 1,
+            Block::Mounting => 2,
             _ => 3,
         }
     }

@@ -72,3 +72,68 @@ impl ImuErrors {
         ImuSample { dtheta, dvel, ..*s }
     }
 }
+
+/// Vehicle speed from an odometer (wheel encoder, CAN speed) at time `t`: the
+/// forward speed of the vehicle reference point, before scale correction [m/s].
+/// Pulse counts are converted to speed by the reader (v = K_OD dN / dt, seed 004 eq. 2).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OdometerSample {
+    /// Time of validity [s]: the end of the counting interval.
+    pub t: f64,
+    /// Forward speed [m/s] (negative when reversing, if the sensor tells).
+    pub speed_mps: f64,
+    /// Length of the counting interval [s]; the speed is its mean. 0 = instantaneous.
+    pub interval_s: f64,
+}
+
+/// A heading measurement: azimuth of a body-fixed direction (the dual-antenna
+/// baseline) from true north, clockwise [rad], with its 1-sigma [rad].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HeadingObs {
+    /// Time of validity [s] (GNSS time scale).
+    pub t: f64,
+    pub heading_rad: f64,
+    pub std_rad: f64,
+}
+
+/// One time-tagged aiding input, as read from files. The navigator merges them with
+/// the IMU stream in time order.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Measurement {
+    Gnss(GnssFix),
+    Odometer(OdometerSample),
+    Heading(HeadingObs),
+}
+
+impl Measurement {
+    /// Time of validity [s]. An odometer speed averaged over a counting interval is
+    /// the speed at the interval's midpoint (exact for constant acceleration).
+    pub fn t(&self) -> f64 {
+        match self {
+            Measurement::Gnss(f) => f.t,
+            Measurement::Odometer(o) => o.t - 0.5 * o.interval_s,
+            Measurement::Heading(h) => h.t,
+        }
+    }
+
+    /// True for inputs time-tagged by the GNSS receiver (shifted by the GNSS-IMU time
+    /// offset when it is estimated); the odometer shares the IMU clock.
+    pub fn on_gnss_clock(&self) -> bool {
+        !matches!(self, Measurement::Odometer(_))
+    }
+}
+
+/// Merge separately read, time-sorted inputs into one time-sorted list (stable: at
+/// equal times GNSS comes first, then odometer, then heading).
+pub fn merge_measurements(
+    gnss: &[GnssFix],
+    odometer: &[OdometerSample],
+    heading: &[HeadingObs],
+) -> Vec<Measurement> {
+    let mut all: Vec<Measurement> = Vec::with_capacity(gnss.len() + odometer.len() + heading.len());
+    all.extend(gnss.iter().map(|f| Measurement::Gnss(*f)));
+    all.extend(odometer.iter().map(|o| Measurement::Odometer(*o)));
+    all.extend(heading.iter().map(|h| Measurement::Heading(*h)));
+    all.sort_by(|a, b| a.t().total_cmp(&b.t()));
+    all
+}

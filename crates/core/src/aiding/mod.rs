@@ -1,13 +1,32 @@
 //! Aiding sources. Each file holds one source's measurement, Jacobian and noise
 //! (`linearize`); this module is the single registration point: add a variant to
-//! [`Aiding`] and a line to [`Aiding::linearize`].
+//! [`Aiding`] and a line to [`Aiding::name`] and [`Aiding::linearize`].
+//! `vehicle_frame.rs` is shared kinematics (the vehicle reference point's velocity)
+//! for the NHC and the odometer.
 
 pub mod gnss_position;
 pub mod gnss_velocity;
+pub mod heading;
+pub mod nhc;
+pub mod odometer;
+pub mod vehicle_frame;
+pub mod zero_velocity;
 
 use crate::state::StateLayout;
-use crate::types::{GnssFix, NavState};
-use nalgebra::{DMatrix, DVector, Vector3};
+use crate::types::{GnssFix, HeadingObs, NavState};
+use heading::HeadingAxis;
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+
+/// Current estimates of the vehicle installation (SYSTEM.md §4b).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VehicleEstimate {
+    /// C_b^m: IMU frame to vehicle frame (nominal mounting corrected by the filter).
+    pub c_bm: Matrix3<f64>,
+    /// Lever arm IMU centre -> vehicle reference point, IMU frame [m].
+    pub lever_arm_b: Vector3<f64>,
+    /// Odometer scale estimate k (true = (1 + k) measured).
+    pub odometer_scale: f64,
+}
 
 /// What the aiding models may read about the current INS solution.
 pub struct AidingContext<'a> {
@@ -19,6 +38,7 @@ pub struct AidingContext<'a> {
     pub a_n: Vector3<f64>,
     /// Antenna lever arm in the body frame [m].
     pub lever_arm_b: Vector3<f64>,
+    pub vehicle: VehicleEstimate,
 }
 
 /// A linearised measurement: innovation y = h(x_est) - z ~ H dx + v, v ~ N(0, R).
@@ -34,6 +54,20 @@ pub struct Linearized {
 pub enum Aiding<'a> {
     GnssPosition(&'a GnssFix),
     GnssVelocity(&'a GnssFix),
+    /// Dual-antenna heading or course over ground.
+    Heading(&'a HeadingObs, HeadingAxis),
+    /// Non-holonomic constraint with lateral/vertical std [m/s].
+    Nhc([f64; 2]),
+    /// Odometer speed [m/s], its std [m/s], optional NHC rows (seed 004's 3-row form).
+    Odometer {
+        speed_mps: f64,
+        std_mps: f64,
+        nhc_std: Option<[f64; 2]>,
+    },
+    /// Zero velocity, std [m/s].
+    Zupt(f64),
+    /// Zero angular rate: window-mean compensated rate [rad/s], std [rad/s].
+    Zaru(Vector3<f64>, f64),
 }
 
 impl Aiding<'_> {
@@ -42,6 +76,12 @@ impl Aiding<'_> {
         match self {
             Aiding::GnssPosition(_) => "gnss_position",
             Aiding::GnssVelocity(_) => "gnss_velocity",
+            Aiding::Heading(_, HeadingAxis::Body(_)) => "dual_antenna_heading",
+            Aiding::Heading(_, HeadingAxis::VehicleForward) => "course_over_ground",
+            Aiding::Nhc(_) => "nhc",
+            Aiding::Odometer { .. } => "odometer",
+            Aiding::Zupt(_) => "zupt",
+            Aiding::Zaru(..) => "zaru",
         }
     }
 
@@ -51,6 +91,178 @@ impl Aiding<'_> {
         match self {
             Aiding::GnssPosition(fix) => Some(gnss_position::linearize(ctx, fix)),
             Aiding::GnssVelocity(fix) => gnss_velocity::linearize(ctx, fix),
+            Aiding::Heading(obs, axis) => heading::linearize(ctx, obs, *axis),
+            Aiding::Nhc(std) => Some(nhc::linearize(ctx, *std)),
+            Aiding::Odometer {
+                speed_mps,
+                std_mps,
+                nhc_std,
+            } => Some(odometer::linearize(ctx, *speed_mps, *std_mps, *nhc_std)),
+            Aiding::Zupt(std) => Some(zero_velocity::linearize_zupt(ctx, *std)),
+            Aiding::Zaru(w, std) => Some(zero_velocity::linearize_zaru(ctx, w, *std)),
         }
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    //! Finite-difference checks of the aiding Jacobians: perturb the true state by a
+    //! small error dx with the conventions of state.rs and compare h(x + dx) - h(x)
+    //! with H dx.
+    use super::*;
+    use crate::attitude::{q_bn_from_euler, quat_from_rotvec};
+    use crate::earth::lla_add_ned;
+    use crate::state::{Block, StateLayout, ATT, BG, POS, SG, VEL};
+    use crate::types::HeadingObs;
+
+    pub struct Fixture {
+        pub nav: NavState,
+        pub layout: StateLayout,
+        pub w_ib_b: Vector3<f64>,
+        pub vehicle: VehicleEstimate,
+    }
+
+    pub fn context_fixture(vehicle_states: bool) -> Fixture {
+        let mut layout = StateLayout::ins21();
+        if vehicle_states {
+            layout.push(Block::OdometerScale);
+            layout.push(Block::Mounting);
+        }
+        Fixture {
+            nav: NavState {
+                t: 0.0,
+                lla: Vector3::new(0.7, 1.9, 120.0),
+                v_n: Vector3::new(8.0, -5.0, 0.3),
+                q_bn: q_bn_from_euler(&Vector3::new(0.03, -0.05, 2.4)),
+            },
+            layout,
+            w_ib_b: Vector3::new(0.02, -0.01, 0.15),
+            vehicle: VehicleEstimate {
+                c_bm: crate::attitude::c_bn_from_euler(&Vector3::new(0.01, 0.02, -0.03)),
+                lever_arm_b: Vector3::new(-0.8, 0.3, 0.4),
+                odometer_scale: 0.003,
+            },
+        }
+    }
+
+    fn ctx<'a>(
+        f: &'a Fixture,
+        nav: &'a NavState,
+        w: Vector3<f64>,
+        v: VehicleEstimate,
+    ) -> AidingContext<'a> {
+        AidingContext {
+            nav,
+            layout: &f.layout,
+            w_ib_b: w,
+            a_n: Vector3::zeros(),
+            lever_arm_b: Vector3::new(0.5, 0.1, -1.0),
+            vehicle: v,
+        }
+    }
+
+    /// Apply an error dx to the true state (state.rs conventions; the IMU error states
+    /// are true - estimate, so the compensated rate is w + db_g + diag(w) ds_g).
+    fn inject(f: &Fixture, dx: &DVector<f64>) -> (NavState, Vector3<f64>, VehicleEstimate) {
+        let v3 = |i: usize| Vector3::new(dx[i], dx[i + 1], dx[i + 2]);
+        let mut nav = f.nav;
+        nav.lla = lla_add_ned(&f.nav.lla, &v3(POS));
+        nav.v_n += v3(VEL);
+        nav.q_bn = quat_from_rotvec(&(-v3(ATT))) * f.nav.q_bn;
+        let w = f.w_ib_b + v3(BG) + f.w_ib_b.component_mul(&v3(SG));
+        let mut veh = f.vehicle;
+        if let Some(i) = f.layout.index(Block::OdometerScale) {
+            veh.odometer_scale += dx[i];
+        }
+        if let Some(i) = f.layout.index(Block::Mounting) {
+            let da = Vector3::new(0.0, dx[i], dx[i + 1]);
+            veh.c_bm = quat_from_rotvec(&(-da)).to_rotation_matrix().into_inner() * veh.c_bm;
+        }
+        (nav, w, veh)
+    }
+
+    /// Check column by column that `model`'s Jacobian matches finite differences.
+    pub fn numeric_jacobian_check(
+        f: &Fixture,
+        model: impl Fn(&AidingContext) -> (Vector3<f64>, DMatrix<f64>),
+        eps: f64,
+    ) {
+        let (h0, jac) = model(&ctx(f, &f.nav, f.w_ib_b, f.vehicle));
+        let n = f.layout.len();
+        for j in 0..n {
+            let mut dx = DVector::zeros(n);
+            dx[j] = eps;
+            let (nav, w, veh) = inject(f, &dx);
+            let (h1, _) = model(&ctx(f, &nav, w, veh));
+            let num = (h1 - h0) / eps;
+            for i in 0..3 {
+                let tol = 1e-4 * (1.0 + jac[(i, j)].abs());
+                assert!(
+                    (num[i] - jac[(i, j)]).abs() < tol,
+                    "row {i} col {j}: numeric {} analytic {}",
+                    num[i],
+                    jac[(i, j)]
+                );
+            }
+        }
+    }
+
+    /// Linearized models checked the same way; `make` builds the measurement from the
+    /// (perturbed) compensated rate, for ZARU whose input is that rate.
+    fn check_linearized<'a>(f: &Fixture, make: impl Fn(Vector3<f64>) -> Aiding<'a>) {
+        let c0 = ctx(f, &f.nav, f.w_ib_b, f.vehicle);
+        let aiding = make(f.w_ib_b);
+        let l0 = aiding.linearize(&c0).unwrap();
+        let n = f.layout.len();
+        let eps = 1e-6;
+        for j in 0..n {
+            let mut dx = DVector::zeros(n);
+            dx[j] = eps;
+            let (nav, w, veh) = inject(f, &dx);
+            let l1 = make(w).linearize(&ctx(f, &nav, w, veh)).unwrap();
+            for i in 0..l0.y.len() {
+                let num = (l1.y[i] - l0.y[i]) / eps;
+                let tol = 1e-4 * (1.0 + l0.h[(i, j)].abs());
+                assert!(
+                    (num - l0.h[(i, j)]).abs() < tol,
+                    "{} row {i} col {j}: numeric {num} analytic {}",
+                    aiding.name(),
+                    l0.h[(i, j)]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn aiding_jacobians_match_finite_differences() {
+        let f = context_fixture(true);
+        let fix = GnssFix {
+            t: 0.0,
+            lla: f.nav.lla,
+            std_ned: Vector3::repeat(1.0),
+            vel_ned: Some(f.nav.v_n),
+            vel_std_ned: Some(Vector3::repeat(0.1)),
+        };
+        let hd = HeadingObs {
+            t: 0.0,
+            heading_rad: 2.0,
+            std_rad: 0.01,
+        };
+        for a in [
+            Aiding::GnssPosition(&fix),
+            Aiding::GnssVelocity(&fix),
+            Aiding::Heading(&hd, HeadingAxis::Body(Vector3::new(1.2, 0.3, 0.1))),
+            Aiding::Heading(&hd, HeadingAxis::VehicleForward),
+            Aiding::Nhc([0.1, 0.1]),
+            Aiding::Odometer {
+                speed_mps: 9.0,
+                std_mps: 0.05,
+                nhc_std: Some([0.1, 0.1]),
+            },
+            Aiding::Zupt(0.01),
+        ] {
+            check_linearized(&f, |_| a);
+        }
+        check_linearized(&f, |w| Aiding::Zaru(w, 1e-4));
     }
 }

@@ -1,0 +1,38 @@
+//! Odometer forward speed with scale-factor error (SYSTEM.md §4b; seed 004 eq. 1-7).
+//! True speed = (1 + k) * measured; k is the `OdometerScale` state (dk = k_est - k_true).
+//!
+//!   y = v^m_x,INS - (1 + k) s_od ~ row 1 of the vehicle_frame Jacobian - s_od dk
+//!   R = std²
+//!
+//! With `nhc_std`, the lateral and vertical rows (v^m = [v 0 0]^T, seed 004's
+//! three-row measurement) are appended.
+
+use super::{vehicle_frame::vehicle_velocity, AidingContext, Linearized};
+use crate::state::Block;
+use nalgebra::{DMatrix, DVector};
+
+pub fn linearize(
+    ctx: &AidingContext,
+    speed_mps: f64,
+    std_mps: f64,
+    nhc_std: Option<[f64; 2]>,
+) -> Linearized {
+    let (v_m, h3) = vehicle_velocity(ctx);
+    let rows = if nhc_std.is_some() { 3 } else { 1 };
+    let k = ctx.vehicle.odometer_scale;
+    let mut y = DVector::zeros(rows);
+    y[0] = v_m.x - (1.0 + k) * speed_mps;
+    let mut h = h3.rows(0, rows).into_owned();
+    if let Some(i) = ctx.layout.index(Block::OdometerScale) {
+        h[(0, i)] = -speed_mps;
+    }
+    let mut r = DMatrix::zeros(rows, rows);
+    r[(0, 0)] = std_mps.powi(2);
+    if let Some(s) = nhc_std {
+        y[1] = v_m.y;
+        y[2] = v_m.z;
+        r[(1, 1)] = s[0].powi(2);
+        r[(2, 2)] = s[1].powi(2);
+    }
+    Linearized { y, h, r }
+}

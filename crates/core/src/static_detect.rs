@@ -1,0 +1,144 @@
+//! Static (standstill) detection over a sliding window of IMU samples, for the
+//! zero-velocity updates and to suspend the non-holonomic constraint.
+//!
+//! Static when, over the last `window_s`: the standard deviation of the specific-force
+//! vector (RMS deviation from its window mean) is below a threshold (no vibration, no
+//! change of acceleration), and the standard deviation of the angular rate (RMS deviation of the rate vector
+//! from its window mean) is below a threshold. Standard deviations rather than means,
+//! so that an unknown gyro turn-on bias (degrees per second on MEMS parts) does not
+//! hide a standstill; the odometer, when present, vetoes steady motion.
+
+use nalgebra::Vector3;
+use std::collections::VecDeque;
+
+#[derive(Clone, Debug)]
+pub struct StaticDetector {
+    window_s: f64,
+    /// (t, dt, f [m/s²], w [rad/s]) of the samples in the window.
+    samples: VecDeque<(f64, f64, Vector3<f64>, Vector3<f64>)>,
+    sum_f: Vector3<f64>,
+    sum_f2: f64,
+    sum_w: Vector3<f64>,
+    sum_w2: f64,
+    sum_w_dt: Vector3<f64>,
+    sum_dt: f64,
+}
+
+impl StaticDetector {
+    pub fn new(window_s: f64) -> Self {
+        StaticDetector {
+            window_s,
+            samples: VecDeque::new(),
+            sum_f: Vector3::zeros(),
+            sum_f2: 0.0,
+            sum_w: Vector3::zeros(),
+            sum_w2: 0.0,
+            sum_w_dt: Vector3::zeros(),
+            sum_dt: 0.0,
+        }
+    }
+
+    /// Add one compensated IMU interval ending at `t`: specific force and rate [SI].
+    pub fn push(&mut self, t: f64, dt: f64, f_b: &Vector3<f64>, w_b: &Vector3<f64>) {
+        if dt <= 0.0 {
+            return;
+        }
+        self.samples.push_back((t, dt, *f_b, *w_b));
+        self.sum_f += f_b;
+        self.sum_f2 += f_b.norm_squared();
+        self.sum_w += w_b;
+        self.sum_w2 += w_b.norm_squared();
+        self.sum_w_dt += w_b * dt;
+        self.sum_dt += dt;
+        while let Some(&(t0, dt0, f0, w0)) = self.samples.front() {
+            if t - (t0 - dt0) <= self.window_s + 1e-9 {
+                break;
+            }
+            self.samples.pop_front();
+            self.sum_f -= f0;
+            self.sum_f2 -= f0.norm_squared();
+            self.sum_w -= w0;
+            self.sum_w2 -= w0.norm_squared();
+            self.sum_w_dt -= w0 * dt0;
+            self.sum_dt -= dt0;
+        }
+    }
+
+    /// Forget the window (after a gap in the data).
+    pub fn clear(&mut self) {
+        *self = StaticDetector::new(self.window_s);
+    }
+
+    /// The window's mean angular rate [rad/s] when it is full and static:
+    /// std(f) < `accel_std_max` [m/s²] and std(w) < `gyro_std_max` [rad/s] (vector
+    /// standard deviations: sqrt(mean |x|² - |mean x|²)).
+    pub fn static_mean_rate(&self, accel_std_max: f64, gyro_std_max: f64) -> Option<Vector3<f64>> {
+        let n = self.samples.len();
+        if n < 3 || self.sum_dt < 0.9 * self.window_s {
+            return None;
+        }
+        let k = n as f64;
+        let mean_f = self.sum_f / k;
+        let var_f = ((self.sum_f2 - k * mean_f.norm_squared()) / (k - 1.0)).max(0.0);
+        let mean_w = self.sum_w / k;
+        let var_w = ((self.sum_w2 - k * mean_w.norm_squared()) / (k - 1.0)).max(0.0);
+        (var_f.sqrt() < accel_std_max && var_w.sqrt() < gyro_std_max)
+            .then_some(self.sum_w_dt / self.sum_dt)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn detects_rest_and_motion() {
+        let mut d = StaticDetector::new(1.0);
+        let g = Vector3::new(0.0, 0.0, -9.8);
+        let mut noise = 0.0_f64;
+        for k in 1..=100 {
+            noise = (noise * 7.3 + 0.31).fract();
+            let f = g + Vector3::new(0.0, 0.0, 0.02 * (noise - 0.5));
+            d.push(k as f64 * 0.01, 0.01, &f, &Vector3::new(1e-4, 0.0, 0.0));
+            if k < 90 {
+                assert!(
+                    d.static_mean_rate(0.05, 0.01).is_none(),
+                    "window not full at {k}"
+                );
+            }
+        }
+        assert!(d.static_mean_rate(0.05, 0.01).is_some());
+        // Starting to accelerate forward: |f| barely changes, the vector does.
+        let mut e = d.clone();
+        for k in 101..=150 {
+            let a = 0.02 * (k - 100) as f64;
+            e.push(
+                k as f64 * 0.01,
+                0.01,
+                &(g + Vector3::new(a, 0.0, 0.0)),
+                &Vector3::zeros(),
+            );
+        }
+        assert!(e.static_mean_rate(0.05, 0.01).is_none());
+        // Vibration: the magnitude swings by 0.5 m/s².
+        for k in 101..=200 {
+            let f = g * (1.0 + 0.05 * ((k % 2) as f64 - 0.5));
+            d.push(k as f64 * 0.01, 0.01, &f, &Vector3::zeros());
+        }
+        assert!(d.static_mean_rate(0.05, 0.01).is_none());
+        // A large constant gyro bias does not hide rest; a changing rate is motion.
+        d.clear();
+        for k in 1..=200 {
+            d.push(k as f64 * 0.01, 0.01, &g, &Vector3::new(0.0, 0.0, 0.05));
+        }
+        let w = d
+            .static_mean_rate(0.05, 0.01)
+            .expect("static with a 3 deg/s bias");
+        assert!((w.z - 0.05).abs() < 1e-12);
+        for k in 201..=300 {
+            let w = Vector3::new(0.0, 0.0, 0.05 + 0.002 * (k - 200) as f64);
+            d.push(k as f64 * 0.01, 0.01, &g, &w);
+        }
+        assert!(d.static_mean_rate(0.05, 0.01).is_none());
+    }
+}
