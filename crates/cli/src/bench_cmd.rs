@@ -85,7 +85,7 @@ pub fn main(kf_gins: Option<PathBuf>, repeat: usize, json_out: bool) -> Result<(
         let s = navfuse_core::run::<anyhow::Error>(
             &cfg.nav,
             imu.iter().map(|s| Ok(*s)),
-            &fixes,
+            &navfuse_core::merge_measurements(&fixes, &[], &[]),
             None,
             |_| Ok(()),
             |_| {},

@@ -6,11 +6,13 @@ use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use navfuse_core::config::TimeOffsetConfig;
 use navfuse_core::outage::OutageSchedule;
-use navfuse_core::{GnssFix, Navigator, RunSummary};
+use navfuse_core::{GnssFix, HeadingObs, Navigator, OdometerSample, RunSummary};
 use navfuse_io::config::{self, RunConfig};
 use navfuse_io::gnss::read_gnss;
+use navfuse_io::heading::read_heading;
 use navfuse_io::imu::open_imu;
 use navfuse_io::nav::{CsvWriter, ImuErrWriter, NavWriter, SolutionRecord, StdWriter};
+use navfuse_io::odometer::read_odometer;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -68,6 +70,9 @@ pub struct JobResult {
     pub wall: Duration,
     pub files: Vec<PathBuf>,
     pub gnss_fixes: usize,
+    /// Odometer samples and heading records read (0 when not configured).
+    pub odometer_samples: usize,
+    pub heading_records: usize,
     pub time_offset: Option<TimeOffsetFit>,
 }
 
@@ -95,6 +100,22 @@ impl JobResult {
                 "rate_sigma_ppm": f.rate_sd * 1e6,
                 "t_start": f.t0,
             })),
+            "odometer_samples": self.odometer_samples,
+            "heading_records": self.heading_records,
+            "aiding_used": s.aiding_used,
+            "aiding_rejected": s.aiding_rejected,
+            "static_s": s.static_s,
+            "odometer_scale": s.odometer_scale.map(|(k, sd)| serde_json::json!({
+                "k_ppm": k * 1e6,
+                "sd_ppm": sd * 1e6,
+            })),
+            "mounting": s.mounting.map(|(rpy, sd)| serde_json::json!({
+                "roll_deg": rpy.x.to_degrees(),
+                "pitch_deg": rpy.y.to_degrees(),
+                "yaw_deg": rpy.z.to_degrees(),
+                "sd_pitch_deg": sd[0].to_degrees(),
+                "sd_yaw_deg": sd[1].to_degrees(),
+            })),
             "events": s.events.iter().map(|e| e.to_string()).collect::<Vec<_>>(),
             "files": self.files.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
         })
@@ -113,6 +134,25 @@ impl JobResult {
             s.imu_samples, s.first_t, s.last_t, span, self.wall.as_secs_f64(), speed,
             s.gnss_used, self.gnss_fixes, s.gnss_rejected, s.gnss_in_outage
         );
+        // Aiding other than GNSS position/velocity (counted above): used/rejected.
+        let aiding: Vec<String> = s
+            .aiding_used
+            .keys()
+            .chain(s.aiding_rejected.keys())
+            .filter(|k| !k.starts_with("gnss_"))
+            .collect::<std::collections::BTreeSet<_>>()
+            .into_iter()
+            .map(|k| {
+                let used = s.aiding_used.get(k).copied().unwrap_or(0);
+                match s.aiding_rejected.get(k).copied().unwrap_or(0) {
+                    0 => format!("{k} {used}"),
+                    r => format!("{k} {used} ({r} rejected)"),
+                }
+            })
+            .collect();
+        if !aiding.is_empty() {
+            line.push_str(&format!("; aiding {}", aiding.join(", ")));
+        }
         if let Some(f) = &self.time_offset {
             line.push_str(&format!(
                 "; GNSS-IMU time offset {:.4} s at t {:.1} (1-sigma {:.4}), rate {:.1} ppm (1-sigma {:.1}), estimated in a first pass; output times are GNSS time",
@@ -146,14 +186,37 @@ pub fn run_job(mut cfg: RunConfig, out_dir: &Path, progress: bool) -> Result<Job
         }
         None => (Vec::new(), None),
     };
-    // Put GNSS times on the IMU's week reference.
+    // Odometer (IMU time scale) and dual-antenna heading (GNSS time scale).
+    let odometer: Vec<OdometerSample> = match &cfg.odometer {
+        Some(src) if cfg.nav.odometer.enabled => {
+            let o = read_odometer(src).map_err(|e| anyhow::anyhow!("{e}"))?;
+            if o.is_empty() {
+                input_notes.push(format!("{}: no odometer samples", src.path.display()));
+            }
+            o
+        }
+        _ => Vec::new(),
+    };
+    let mut heading: Vec<HeadingObs> = match &cfg.heading {
+        Some(src) if cfg.nav.heading.baseline_b.is_some() => {
+            let h = read_heading(&src.path).map_err(|e| anyhow::anyhow!("{e}"))?;
+            if h.is_empty() {
+                input_notes.push(format!("{}: no heading records", src.path.display()));
+            }
+            h
+        }
+        _ => Vec::new(),
+    };
+    // Put GNSS times (fixes and heading) on the IMU's week reference.
     if let (Some(wi), Some(wg)) = (imu_week, gnss_week) {
         let shift = (wg as f64 - wi as f64) * WEEK_S;
         if shift != 0.0 {
             fixes.iter_mut().for_each(|f| f.t += shift);
+            heading.iter_mut().for_each(|h| h.t += shift);
         }
     }
     let week = imu_week.or(gnss_week).unwrap_or(0);
+    let measurements = navfuse_core::merge_measurements(&fixes, &odometer, &heading);
 
     let first = match reader.next() {
         Some(Ok(s)) => s,
@@ -177,7 +240,7 @@ pub fn run_job(mut cfg: RunConfig, out_dir: &Path, progress: bool) -> Result<Job
             let s1 = navfuse_core::run(
                 &cfg.nav,
                 pass1_reader.map(|r| r.map_err(|e| anyhow::anyhow!("{e}"))),
-                &fixes,
+                &measurements,
                 Some(f64::INFINITY),
                 |_| Ok(()),
                 |_| {},
@@ -308,7 +371,7 @@ pub fn run_job(mut cfg: RunConfig, out_dir: &Path, progress: bool) -> Result<Job
                 .by_ref()
                 .map(|r| r.map_err(|e| anyhow::anyhow!("{e}"))),
         ),
-        &fixes,
+        &measurements,
         cfg.output.rate_hz.map(|r| 1.0 / r),
         |n: &Navigator| {
             let nav = *n.nav();
@@ -379,7 +442,7 @@ pub fn run_job(mut cfg: RunConfig, out_dir: &Path, progress: bool) -> Result<Job
             .count();
         if rej > 0 {
             eprintln!(
-                "navfuse: {rej} GNSS measurements rejected by the innovation gate (see events.log)"
+                "navfuse: {rej} GNSS/heading measurements rejected by the innovation gate (see events.log)"
             );
         }
     }
@@ -388,6 +451,8 @@ pub fn run_job(mut cfg: RunConfig, out_dir: &Path, progress: bool) -> Result<Job
         wall: t_wall.elapsed(),
         files,
         gnss_fixes: fixes.len(),
+        odometer_samples: odometer.len(),
+        heading_records: heading.len(),
         time_offset: time_offset_pass1,
     };
     let sum_path = out_dir.join("summary.json");

@@ -16,7 +16,8 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::Vector3;
 use navfuse_core::config::{
-    AttitudeInit, FilterOptions, GnssOptions, ImuNoise, InitialState, NavConfig, TimeOffsetConfig,
+    AttitudeInit, FilterOptions, GnssOptions, HeadingOptions, ImuNoise, InitialState, NavConfig,
+    NhcMode, NhcOptions, OdometerOptions, TimeOffsetConfig, VehicleOptions, ZuptOptions,
     DEFAULT_COVARIANCE_PERIOD_S, DEFAULT_GATE_TIMEOUT_S,
 };
 use navfuse_core::outage::{OutageSchedule, Periodic, Window};
@@ -26,8 +27,9 @@ use serde::ser::SerializeSeq;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use crate::input::{
-    AccelUnit, CsvImuOptions, GnssFormat, GnssSource, GyroUnit, ImuFormat, ImuQuantity, ImuSource,
-    OutputSpec, RateSampling, RtklibExplorerImuOptions, TimeScale, TimeUnit,
+    AccelUnit, CsvImuOptions, GnssFormat, GnssSource, GyroUnit, HeadingSource, ImuFormat,
+    ImuQuantity, ImuSource, OdometerFormat, OdometerSource, OutputSpec, RateSampling,
+    RtklibExplorerImuOptions, TimeScale, TimeUnit,
 };
 
 // ---------------------------------------------------------------------------------
@@ -141,6 +143,11 @@ pub struct RunConfig {
     pub imu: ImuSource,
     /// None = pure inertial run (no `[gnss]` section).
     pub gnss: Option<GnssSource>,
+    /// Odometer input (`[odometer]`); None = no odometer. Times on the IMU time scale.
+    pub odometer: Option<OdometerSource>,
+    /// Dual-antenna heading input (`heading.file`); None = none. Times on the GNSS
+    /// time scale.
+    pub heading: Option<HeadingSource>,
     pub output: OutputSpec,
     /// The config file this came from.
     pub source_path: PathBuf,
@@ -341,31 +348,39 @@ impl Num3 {
 
 impl<'de> Deserialize<'de> for Num3 {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        struct V;
-        impl<'de> Visitor<'de> for V {
-            type Value = Num3;
-            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-                f.write_str("a number or an array of 3 numbers")
-            }
-            fn visit_f64<E: de::Error>(self, v: f64) -> Result<Num3, E> {
-                Ok(Num3::Scalar(v))
-            }
-            fn visit_i64<E: de::Error>(self, v: i64) -> Result<Num3, E> {
-                Ok(Num3::Scalar(v as f64))
-            }
-            fn visit_u64<E: de::Error>(self, v: u64) -> Result<Num3, E> {
-                Ok(Num3::Scalar(v as f64))
-            }
-            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Num3, A::Error> {
-                let mut v = Vec::new();
-                while let Some(x) = seq.next_element::<f64>()? {
-                    v.push(x);
-                }
-                Ok(Num3::List(v))
-            }
-        }
-        d.deserialize_any(V)
+        deserialize_num_or_list(d, "a number or an array of 3 numbers")
     }
+}
+
+/// A number or an array of numbers; `expecting` names the shape in type errors.
+fn deserialize_num_or_list<'de, D: Deserializer<'de>>(
+    d: D,
+    expecting: &'static str,
+) -> Result<Num3, D::Error> {
+    struct V(&'static str);
+    impl<'de> Visitor<'de> for V {
+        type Value = Num3;
+        fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+            f.write_str(self.0)
+        }
+        fn visit_f64<E: de::Error>(self, v: f64) -> Result<Num3, E> {
+            Ok(Num3::Scalar(v))
+        }
+        fn visit_i64<E: de::Error>(self, v: i64) -> Result<Num3, E> {
+            Ok(Num3::Scalar(v as f64))
+        }
+        fn visit_u64<E: de::Error>(self, v: u64) -> Result<Num3, E> {
+            Ok(Num3::Scalar(v as f64))
+        }
+        fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Num3, A::Error> {
+            let mut v = Vec::new();
+            while let Some(x) = seq.next_element::<f64>()? {
+                v.push(x);
+            }
+            Ok(Num3::List(v))
+        }
+    }
+    d.deserialize_any(V(expecting))
 }
 
 impl Serialize for Num3 {
@@ -374,6 +389,86 @@ impl Serialize for Num3 {
             Num3::Scalar(x) => s.serialize_f64(*x),
             Num3::List(v) => v.serialize(s),
         }
+    }
+}
+
+/// A number applied to both elements, or an array of exactly two numbers
+/// (`nhc.std_mps`: lateral, vertical).
+#[derive(Clone, Debug, PartialEq)]
+struct Num2(Num3);
+
+impl Num2 {
+    fn from2(v: [f64; 2]) -> Self {
+        if v[0] == v[1] {
+            Num2(Num3::Scalar(v[0]))
+        } else {
+            Num2(Num3::List(v.to_vec()))
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Num2 {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        deserialize_num_or_list(d, "a number or an array of 2 numbers").map(Num2)
+    }
+}
+
+impl Serialize for Num2 {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        self.0.serialize(s)
+    }
+}
+
+/// An innovation-test probability, or `false` for no test.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Gate {
+    Probability(f64),
+    Off,
+}
+
+impl<'de> Deserialize<'de> for Gate {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = Gate;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a probability (e.g. 1e-4) or false (no innovation test)")
+            }
+            fn visit_f64<E: de::Error>(self, v: f64) -> Result<Gate, E> {
+                Ok(Gate::Probability(v))
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<Gate, E> {
+                Ok(Gate::Probability(v as f64))
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<Gate, E> {
+                Ok(Gate::Probability(v as f64))
+            }
+            fn visit_bool<E: de::Error>(self, v: bool) -> Result<Gate, E> {
+                if v {
+                    Err(E::custom(
+                        "expected a probability (e.g. 1e-4) or false (no innovation test), got true",
+                    ))
+                } else {
+                    Ok(Gate::Off)
+                }
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+impl Serialize for Gate {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            Gate::Probability(p) => s.serialize_f64(*p),
+            Gate::Off => s.serialize_bool(false),
+        }
+    }
+}
+
+impl Gate {
+    fn from_option(p: Option<f64>) -> Self {
+        p.map_or(Gate::Off, Gate::Probability)
     }
 }
 
@@ -428,10 +523,20 @@ struct TomlRoot {
     imu: TImu,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     gnss: Option<TGnss>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    odometer: Option<TOdometer>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    heading: Option<THeading>,
     #[serde(default, skip_serializing_if = "TTime::is_empty")]
     time: TTime,
     initial: TInitial,
     imu_noise: TNoise,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    vehicle: Option<TVehicle>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    nhc: Option<TNhc>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    zupt: Option<TZupt>,
     #[serde(default)]
     filter: TFilter,
     #[serde(default)]
@@ -637,13 +742,140 @@ struct TInitial {
     accel_scale_std_ppm: Option<Num3>,
 }
 
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+enum TAlignMode {
+    #[serde(rename = "level_and_course")]
+    LevelAndCourse,
+    #[serde(rename = "static_gyrocompass")]
+    StaticGyrocompass,
+    #[serde(rename = "in_motion")]
+    InMotion,
+    #[serde(rename = "auto")]
+    Auto,
+}
+
 #[derive(Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct TAlignment {
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    mode: Option<TAlignMode>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     level_window_s: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     min_speed_mps: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    gyrocompass: Option<bool>,
+}
+
+#[derive(Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct TVehicle {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    mounting_rpy_deg: Option<Vec<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    lever_arm_m: Option<Vec<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    mounting_std_deg: Option<f64>,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+enum TNhcMode {
+    #[serde(rename = "off")]
+    Off,
+    #[serde(rename = "always")]
+    Always,
+    #[serde(rename = "outage")]
+    Outage,
+}
+
+#[derive(Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct TNhc {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    mode: Option<TNhcMode>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    std_mps: Option<Num2>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    rate_hz: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    outage_after_s: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    gate_probability: Option<Gate>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    min_speed_mps: Option<f64>,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+enum TOdoFormat {
+    #[serde(rename = "speed")]
+    Speed,
+    #[serde(rename = "pulses")]
+    Pulses,
+    #[serde(rename = "navfuse")]
+    Navfuse,
+}
+
+#[derive(Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct TOdometer {
+    file: String,
+    format: TOdoFormat,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    meters_per_pulse: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    speed_is_mean: Option<bool>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    std_mps: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    scale_ppm: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    scale_std_ppm: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    scale_random_walk_ppm_per_sqrth: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    with_nhc: Option<bool>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    gate_probability: Option<Gate>,
+}
+
+#[derive(Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct THeading {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    file: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    baseline_m: Option<Vec<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    std_deg: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    course_over_ground: Option<bool>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    course_min_speed_mps: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    course_std_floor_deg: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    gate_probability: Option<Gate>,
+}
+
+#[derive(Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct TZupt {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    enabled: Option<bool>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    window_s: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    accel_std_max_mps2: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    gyro_max_dps: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    rate_hz: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    velocity_std_mps: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    angular_rate_std_dps: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    max_speed_mps: Option<f64>,
 }
 
 #[derive(Debug, Deserialize, Serialize)]
@@ -792,6 +1024,8 @@ struct Converted {
     nav: NavConfig,
     imu: ImuSource,
     gnss: Option<GnssSource>,
+    odometer: Option<OdometerSource>,
+    heading: Option<HeadingSource>,
     output: OutputSpec,
     relative_outages: Vec<RelativeOutage>,
 }
@@ -802,6 +1036,8 @@ impl Converted {
             nav: self.nav,
             imu: self.imu,
             gnss: self.gnss,
+            odometer: self.odometer,
+            heading: self.heading,
             output: self.output,
             source_path: path.to_path_buf(),
             kfgins_output_path: kf_out,
@@ -905,31 +1141,21 @@ fn convert(raw: TomlRoot, base: &Path) -> KResult<Converted> {
                 "give either initial.attitude_deg or [initial.alignment], not both",
             ))
         }
-        (None, None) => {
-            return Err(kerr(
-                "initial.attitude_deg",
-                "missing: give initial.attitude_deg [roll, pitch, yaw] in degrees, or an [initial.alignment] table",
-            ))
-        }
-        (None, Some(al)) => {
-            let level_window_s = al.level_window_s.unwrap_or(10.0);
-            let min_speed_mps = al.min_speed_mps.unwrap_or(3.0);
-            if !(level_window_s > 0.0 && level_window_s.is_finite()) {
-                return Err(kerr("initial.alignment.level_window_s", format!("must be > 0 s, got {level_window_s}")));
-            }
-            if !(min_speed_mps > 0.0 && min_speed_mps.is_finite()) {
-                return Err(kerr("initial.alignment.min_speed_mps", format!("must be > 0 m/s, got {min_speed_mps}")));
-            }
-            AttitudeInit::LevelAndGnssCourse { level_window_s, min_speed_mps }
-        }
+        // No attitude in the config: found from the data (static or in motion).
+        (None, None) => AttitudeInit::Auto {
+            level_window_s: DEFAULT_LEVEL_WINDOW_S,
+            min_speed_mps: DEFAULT_ALIGN_MIN_SPEED_MPS,
+            gyrocompass: false,
+        },
+        (None, Some(al)) => convert_alignment(al)?,
         (Some(att), None) => {
-    let att = v3("initial.attitude_deg", att)?;
-    if !(-90.0..=90.0).contains(&att[1]) {
-        return Err(kerr(
-            "initial.attitude_deg",
-            format!("pitch (element 1) must be in [-90, 90] deg, got {}", att[1]),
-        ));
-    }
+            let att = v3("initial.attitude_deg", att)?;
+            if !(-90.0..=90.0).contains(&att[1]) {
+                return Err(kerr(
+                    "initial.attitude_deg",
+                    format!("pitch (element 1) must be in [-90, 90] deg, got {}", att[1]),
+                ));
+            }
             AttitudeInit::Given(vec3(map3(att, |x| x * D2R)))
         }
     };
@@ -1048,6 +1274,30 @@ fn convert(raw: TomlRoot, base: &Path) -> KResult<Converted> {
         csv: o.csv.unwrap_or(false),
     };
 
+    let vehicle = match &raw.vehicle {
+        Some(v) => convert_vehicle(v)?,
+        None => VehicleOptions::default(),
+    };
+    let nhc = match &raw.nhc {
+        Some(n) => convert_nhc(n)?,
+        None => NhcOptions::default(),
+    };
+    let (odometer_src, odometer) = match &raw.odometer {
+        Some(o) => {
+            let (src, opts) = convert_odometer(o, base)?;
+            (Some(src), opts)
+        }
+        None => (None, OdometerOptions::default()),
+    };
+    let (heading_src, heading) = match &raw.heading {
+        Some(h) => convert_heading(h, base)?,
+        None => (None, HeadingOptions::default()),
+    };
+    let zupt = match &raw.zupt {
+        Some(z) => convert_zupt(z)?,
+        None => ZuptOptions::default(),
+    };
+
     let nav = NavConfig {
         imu_noise,
         initial,
@@ -1056,6 +1306,11 @@ fn convert(raw: TomlRoot, base: &Path) -> KResult<Converted> {
             covariance_period_s,
             time_offset,
         },
+        vehicle,
+        nhc,
+        odometer,
+        heading,
+        zupt,
         start_time: start.unwrap_or(f64::NEG_INFINITY),
         end_time: end,
     };
@@ -1063,8 +1318,405 @@ fn convert(raw: TomlRoot, base: &Path) -> KResult<Converted> {
         nav,
         imu,
         gnss,
+        odometer: odometer_src,
+        heading: heading_src,
         output,
         relative_outages,
+    })
+}
+
+/// Default `initial.alignment.level_window_s` [s].
+const DEFAULT_LEVEL_WINDOW_S: f64 = 10.0;
+/// Default `initial.alignment.min_speed_mps` [m/s].
+const DEFAULT_ALIGN_MIN_SPEED_MPS: f64 = 3.0;
+/// An innovation-test key of the vehicle and heading aiding: a probability in
+/// [1e-15, 0.5), `false` (None, no test), or absent (`default`).
+fn gate(key: &str, g: Option<Gate>, default: Option<f64>) -> KResult<Option<f64>> {
+    match g {
+        None => Ok(default),
+        Some(Gate::Off) => Ok(None),
+        Some(Gate::Probability(p)) if (1e-15..0.5).contains(&p) => Ok(Some(p)),
+        Some(Gate::Probability(p)) => Err(kerr(
+            key,
+            format!(
+                "expected a probability in [1e-15, 0.5), e.g. 1e-4, or false for no test, got {p}"
+            ),
+        )),
+    }
+}
+
+/// An optional value checked by `check`, or the default (SI) when absent.
+fn opt_or(
+    key: &str,
+    v: Option<f64>,
+    check: fn(&str, f64) -> KResult<f64>,
+    to_si: fn(f64) -> f64,
+    default: f64,
+) -> KResult<f64> {
+    match v {
+        Some(x) => Ok(to_si(check(key, x)?)),
+        None => Ok(default),
+    }
+}
+
+fn same(x: f64) -> f64 {
+    x
+}
+
+fn deg_si(x: f64) -> f64 {
+    x * D2R
+}
+
+/// A std: > 0.
+fn std_pos(key: &str, v: f64) -> KResult<f64> {
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(kerr(
+            key,
+            format!("a standard deviation must be > 0, got {v}"),
+        ))
+    }
+}
+
+fn convert_alignment(al: &TAlignment) -> KResult<AttitudeInit> {
+    let mode = al.mode.unwrap_or(TAlignMode::LevelAndCourse);
+    let mode_name = match mode {
+        TAlignMode::LevelAndCourse => "level_and_course",
+        TAlignMode::StaticGyrocompass => "static_gyrocompass",
+        TAlignMode::InMotion => "in_motion",
+        TAlignMode::Auto => "auto",
+    };
+    if mode == TAlignMode::InMotion && al.level_window_s.is_some() {
+        return Err(kerr(
+            "initial.alignment.level_window_s",
+            "does not apply to mode = \"in_motion\" (no static levelling window)",
+        ));
+    }
+    if mode == TAlignMode::StaticGyrocompass && al.min_speed_mps.is_some() {
+        return Err(kerr(
+            "initial.alignment.min_speed_mps",
+            "does not apply to mode = \"static_gyrocompass\" (the yaw does not come from a GNSS course)",
+        ));
+    }
+    if mode != TAlignMode::Auto && al.gyrocompass.is_some() {
+        return Err(kerr(
+            "initial.alignment.gyrocompass",
+            format!("applies only to mode = \"auto\", not \"{mode_name}\""),
+        ));
+    }
+    let level_window_s = al.level_window_s.unwrap_or(DEFAULT_LEVEL_WINDOW_S);
+    let min_speed_mps = al.min_speed_mps.unwrap_or(DEFAULT_ALIGN_MIN_SPEED_MPS);
+    if !(level_window_s > 0.0 && level_window_s.is_finite()) {
+        return Err(kerr(
+            "initial.alignment.level_window_s",
+            format!("must be > 0 s, got {level_window_s}"),
+        ));
+    }
+    if !(min_speed_mps > 0.0 && min_speed_mps.is_finite()) {
+        return Err(kerr(
+            "initial.alignment.min_speed_mps",
+            format!("must be > 0 m/s, got {min_speed_mps}"),
+        ));
+    }
+    Ok(match mode {
+        TAlignMode::LevelAndCourse => AttitudeInit::LevelAndGnssCourse {
+            level_window_s,
+            min_speed_mps,
+        },
+        TAlignMode::StaticGyrocompass => AttitudeInit::StaticGyrocompass { level_window_s },
+        TAlignMode::InMotion => AttitudeInit::InMotion { min_speed_mps },
+        TAlignMode::Auto => AttitudeInit::Auto {
+            level_window_s,
+            min_speed_mps,
+            gyrocompass: al.gyrocompass.unwrap_or(false),
+        },
+    })
+}
+
+fn convert_vehicle(v: &TVehicle) -> KResult<VehicleOptions> {
+    let d = VehicleOptions::default();
+    let mounting_rpy = match &v.mounting_rpy_deg {
+        Some(m) => {
+            let m = v3("vehicle.mounting_rpy_deg", m)?;
+            if !(-90.0..=90.0).contains(&m[1]) {
+                return Err(kerr(
+                    "vehicle.mounting_rpy_deg",
+                    format!("pitch (element 1) must be in [-90, 90] deg, got {}", m[1]),
+                ));
+            }
+            vec3(map3(m, deg_si))
+        }
+        None => d.mounting_rpy,
+    };
+    let lever_arm_b = match &v.lever_arm_m {
+        Some(l) => vec3(v3("vehicle.lever_arm_m", l)?),
+        None => d.lever_arm_b,
+    };
+    let mounting_std = opt_or(
+        "vehicle.mounting_std_deg",
+        v.mounting_std_deg,
+        non_negative,
+        deg_si,
+        d.mounting_std,
+    )?;
+    Ok(VehicleOptions {
+        mounting_rpy,
+        lever_arm_b,
+        mounting_std,
+    })
+}
+
+fn convert_nhc(n: &TNhc) -> KResult<NhcOptions> {
+    let d = NhcOptions::default();
+    let mode = match n.mode {
+        None => d.mode,
+        Some(TNhcMode::Off) => NhcMode::Off,
+        Some(TNhcMode::Always) => NhcMode::Always,
+        Some(TNhcMode::Outage) => NhcMode::DuringOutage,
+    };
+    let std_mps = match &n.std_mps {
+        None => d.std_mps,
+        Some(Num2(v)) => {
+            let key = "nhc.std_mps";
+            let a = match v {
+                Num3::Scalar(x) => [*x, *x],
+                Num3::List(l) if l.len() == 2 => [l[0], l[1]],
+                Num3::List(l) => {
+                    return Err(kerr(
+                        key,
+                        format!(
+                            "expected a number or an array of 2 numbers [lateral, vertical], got {} element(s)",
+                            l.len()
+                        ),
+                    ))
+                }
+            };
+            for (i, x) in a.iter().enumerate() {
+                if !(x.is_finite() && *x > 0.0) {
+                    let what = if matches!(v, Num3::Scalar(_)) {
+                        String::new()
+                    } else {
+                        format!("element {i}: ")
+                    };
+                    return Err(kerr(
+                        key,
+                        format!("{what}a standard deviation must be > 0, got {x}"),
+                    ));
+                }
+            }
+            a
+        }
+    };
+    Ok(NhcOptions {
+        mode,
+        std_mps,
+        rate_hz: opt_or("nhc.rate_hz", n.rate_hz, positive, same, d.rate_hz)?,
+        outage_after_s: opt_or(
+            "nhc.outage_after_s",
+            n.outage_after_s,
+            non_negative,
+            same,
+            d.outage_after_s,
+        )?,
+        gate_probability: gate(
+            "nhc.gate_probability",
+            n.gate_probability,
+            d.gate_probability,
+        )?,
+        min_speed_mps: opt_or(
+            "nhc.min_speed_mps",
+            n.min_speed_mps,
+            non_negative,
+            same,
+            d.min_speed_mps,
+        )?,
+    })
+}
+
+fn convert_odometer(o: &TOdometer, base: &Path) -> KResult<(OdometerSource, OdometerOptions)> {
+    let d = OdometerOptions::default();
+    let path = file_key(base, "odometer.file", &o.file)?;
+    let format = match o.format {
+        TOdoFormat::Speed => {
+            if o.meters_per_pulse.is_some() {
+                return Err(kerr(
+                    "odometer.meters_per_pulse",
+                    "applies only to odometer.format = \"pulses\" or \"navfuse\"",
+                ));
+            }
+            OdometerFormat::Speed {
+                speed_is_mean: o.speed_is_mean.unwrap_or(true),
+            }
+        }
+        TOdoFormat::Pulses | TOdoFormat::Navfuse => {
+            if o.speed_is_mean.is_some() {
+                return Err(kerr(
+                    "odometer.speed_is_mean",
+                    "applies only to odometer.format = \"speed\" (pulse counts always give the mean speed over the interval)",
+                ));
+            }
+            let k = o.meters_per_pulse.ok_or_else(|| {
+                kerr(
+                    "odometer.meters_per_pulse",
+                    "missing: the distance per pulse [m] is required for pulse counts",
+                )
+            })?;
+            let meters_per_pulse = positive("odometer.meters_per_pulse", k)?;
+            if o.format == TOdoFormat::Pulses {
+                OdometerFormat::Pulses { meters_per_pulse }
+            } else {
+                OdometerFormat::Navfuse { meters_per_pulse }
+            }
+        }
+    };
+    let ppm_finite = |key: &str, v: Option<f64>, default: f64| -> KResult<f64> {
+        opt_or(key, v, finite, ppm_si, default)
+    };
+    let opts = OdometerOptions {
+        enabled: true,
+        std_mps: opt_or("odometer.std_mps", o.std_mps, std_pos, same, d.std_mps)?,
+        scale_initial: ppm_finite("odometer.scale_ppm", o.scale_ppm, d.scale_initial)?,
+        scale_std: opt_or(
+            "odometer.scale_std_ppm",
+            o.scale_std_ppm,
+            non_negative,
+            ppm_si,
+            d.scale_std,
+        )?,
+        scale_random_walk: opt_or(
+            "odometer.scale_random_walk_ppm_per_sqrth",
+            o.scale_random_walk_ppm_per_sqrth,
+            non_negative,
+            ppm_sqrth_psd,
+            d.scale_random_walk,
+        )?,
+        with_nhc: o.with_nhc.unwrap_or(d.with_nhc),
+        gate_probability: gate(
+            "odometer.gate_probability",
+            o.gate_probability,
+            d.gate_probability,
+        )?,
+    };
+    Ok((OdometerSource { path, format }, opts))
+}
+
+/// Random walk in ppm/sqrt(h) -> PSD [1/s]: after T hours the std is q sqrt(T) ppm.
+fn ppm_sqrth_psd(q: f64) -> f64 {
+    (q * 1e-6).powi(2) / 3600.0
+}
+
+fn psd_ppm_sqrth(psd: f64) -> f64 {
+    (psd * 3600.0).sqrt() * 1e6
+}
+
+fn convert_heading(h: &THeading, base: &Path) -> KResult<(Option<HeadingSource>, HeadingOptions)> {
+    let d = HeadingOptions::default();
+    let (src, baseline_b, std_override) = match &h.file {
+        Some(f) => {
+            let path = file_key(base, "heading.file", f)?;
+            let b = h.baseline_m.as_ref().ok_or_else(|| {
+                kerr(
+                    "heading.baseline_m",
+                    "missing: the antenna baseline [m] (primary -> secondary antenna, IMU frame F-R-D) is required with heading.file",
+                )
+            })?;
+            let b = v3("heading.baseline_m", b)?;
+            if vec3(b).norm() == 0.0 {
+                return Err(kerr(
+                    "heading.baseline_m",
+                    "expected a non-zero baseline (its direction gives the heading axis), got [0, 0, 0]",
+                ));
+            }
+            let std_override = h
+                .std_deg
+                .map(|s| std_pos("heading.std_deg", s).map(deg_si))
+                .transpose()?;
+            (Some(HeadingSource { path }), Some(vec3(b)), std_override)
+        }
+        None => {
+            for (key, given) in [
+                ("heading.baseline_m", h.baseline_m.is_some()),
+                ("heading.std_deg", h.std_deg.is_some()),
+            ] {
+                if given {
+                    return Err(kerr(
+                        key,
+                        "applies only with heading.file (a dual-antenna heading input)",
+                    ));
+                }
+            }
+            (None, d.baseline_b, d.dual_antenna_std_override)
+        }
+    };
+    let opts = HeadingOptions {
+        baseline_b,
+        dual_antenna_std_override: std_override,
+        course_over_ground: h.course_over_ground.unwrap_or(d.course_over_ground),
+        course_min_speed_mps: opt_or(
+            "heading.course_min_speed_mps",
+            h.course_min_speed_mps,
+            positive,
+            same,
+            d.course_min_speed_mps,
+        )?,
+        course_std_floor: opt_or(
+            "heading.course_std_floor_deg",
+            h.course_std_floor_deg,
+            std_pos,
+            deg_si,
+            d.course_std_floor,
+        )?,
+        gate_probability: gate(
+            "heading.gate_probability",
+            h.gate_probability,
+            d.gate_probability,
+        )?,
+    };
+    Ok((src, opts))
+}
+
+fn convert_zupt(z: &TZupt) -> KResult<ZuptOptions> {
+    let d = ZuptOptions::default();
+    Ok(ZuptOptions {
+        enabled: z.enabled.unwrap_or(d.enabled),
+        window_s: opt_or("zupt.window_s", z.window_s, positive, same, d.window_s)?,
+        accel_std_max: opt_or(
+            "zupt.accel_std_max_mps2",
+            z.accel_std_max_mps2,
+            positive,
+            same,
+            d.accel_std_max,
+        )?,
+        gyro_max: opt_or(
+            "zupt.gyro_max_dps",
+            z.gyro_max_dps,
+            positive,
+            deg_si,
+            d.gyro_max,
+        )?,
+        rate_hz: opt_or("zupt.rate_hz", z.rate_hz, positive, same, d.rate_hz)?,
+        velocity_std_mps: opt_or(
+            "zupt.velocity_std_mps",
+            z.velocity_std_mps,
+            std_pos,
+            same,
+            d.velocity_std_mps,
+        )?,
+        angular_rate_std: opt_or(
+            "zupt.angular_rate_std_dps",
+            z.angular_rate_std_dps,
+            non_negative,
+            deg_si,
+            d.angular_rate_std,
+        )?,
+        max_speed_mps: opt_or(
+            "zupt.max_speed_mps",
+            z.max_speed_mps,
+            positive,
+            same,
+            d.max_speed_mps,
+        )?,
     })
 }
 
@@ -1512,7 +2164,7 @@ fn to_raw(c: &RunConfig) -> TomlRoot {
         velocity_mps: Some(arr3(&i.v_n).to_vec()),
         attitude_deg: match i.attitude {
             AttitudeInit::Given(rpy) => Some(map3(arr3(&rpy), r2d).to_vec()),
-            AttitudeInit::LevelAndGnssCourse { .. } => None,
+            _ => None,
         },
         alignment: match i.attitude {
             AttitudeInit::Given(_) => None,
@@ -1520,8 +2172,32 @@ fn to_raw(c: &RunConfig) -> TomlRoot {
                 level_window_s,
                 min_speed_mps,
             } => Some(TAlignment {
+                mode: Some(TAlignMode::LevelAndCourse),
                 level_window_s: Some(level_window_s),
                 min_speed_mps: Some(min_speed_mps),
+                gyrocompass: None,
+            }),
+            AttitudeInit::StaticGyrocompass { level_window_s } => Some(TAlignment {
+                mode: Some(TAlignMode::StaticGyrocompass),
+                level_window_s: Some(level_window_s),
+                min_speed_mps: None,
+                gyrocompass: None,
+            }),
+            AttitudeInit::InMotion { min_speed_mps } => Some(TAlignment {
+                mode: Some(TAlignMode::InMotion),
+                level_window_s: None,
+                min_speed_mps: Some(min_speed_mps),
+                gyrocompass: None,
+            }),
+            AttitudeInit::Auto {
+                level_window_s,
+                min_speed_mps,
+                gyrocompass,
+            } => Some(TAlignment {
+                mode: Some(TAlignMode::Auto),
+                level_window_s: Some(level_window_s),
+                min_speed_mps: Some(min_speed_mps),
+                gyrocompass: Some(gyrocompass),
             }),
         },
         position_std_m: Num3::from3(arr3(&i.pos_std)),
@@ -1556,15 +2232,88 @@ fn to_raw(c: &RunConfig) -> TomlRoot {
             rate_std_ppm: Some(t.rate_std * 1e6),
         }),
     };
+    let v = &c.nav.vehicle;
+    let vehicle = TVehicle {
+        mounting_rpy_deg: Some(map3(arr3(&v.mounting_rpy), r2d).to_vec()),
+        lever_arm_m: Some(arr3(&v.lever_arm_b).to_vec()),
+        mounting_std_deg: Some(r2d(v.mounting_std)),
+    };
+    let nh = &c.nav.nhc;
+    let nhc = TNhc {
+        mode: Some(match nh.mode {
+            NhcMode::Off => TNhcMode::Off,
+            NhcMode::Always => TNhcMode::Always,
+            NhcMode::DuringOutage => TNhcMode::Outage,
+        }),
+        std_mps: Some(Num2::from2(nh.std_mps)),
+        rate_hz: Some(nh.rate_hz),
+        outage_after_s: Some(nh.outage_after_s),
+        gate_probability: Some(Gate::from_option(nh.gate_probability)),
+        min_speed_mps: Some(nh.min_speed_mps),
+    };
+    let od = &c.nav.odometer;
+    // An odometer is configured by its file; options without one cannot be written.
+    let odometer = c.odometer.as_ref().map(|src| {
+        let (format, meters_per_pulse, speed_is_mean) = match src.format {
+            OdometerFormat::Speed { speed_is_mean } => {
+                (TOdoFormat::Speed, None, Some(speed_is_mean))
+            }
+            OdometerFormat::Pulses { meters_per_pulse } => {
+                (TOdoFormat::Pulses, Some(meters_per_pulse), None)
+            }
+            OdometerFormat::Navfuse { meters_per_pulse } => {
+                (TOdoFormat::Navfuse, Some(meters_per_pulse), None)
+            }
+        };
+        TOdometer {
+            file: path_str(&src.path),
+            format,
+            meters_per_pulse,
+            speed_is_mean,
+            std_mps: Some(od.std_mps),
+            scale_ppm: Some(tidy(od.scale_initial * 1e6)),
+            scale_std_ppm: Some(tidy(od.scale_std * 1e6)),
+            scale_random_walk_ppm_per_sqrth: Some(tidy(psd_ppm_sqrth(od.scale_random_walk))),
+            with_nhc: Some(od.with_nhc),
+            gate_probability: Some(Gate::from_option(od.gate_probability)),
+        }
+    });
+    let hd = &c.nav.heading;
+    let dual = c.heading.as_ref().filter(|_| hd.baseline_b.is_some());
+    let heading = THeading {
+        file: dual.map(|h| path_str(&h.path)),
+        baseline_m: dual.and(hd.baseline_b).map(|b| arr3(&b).to_vec()),
+        std_deg: dual.and(hd.dual_antenna_std_override).map(r2d),
+        course_over_ground: Some(hd.course_over_ground),
+        course_min_speed_mps: Some(hd.course_min_speed_mps),
+        course_std_floor_deg: Some(r2d(hd.course_std_floor)),
+        gate_probability: Some(Gate::from_option(hd.gate_probability)),
+    };
+    let z = &c.nav.zupt;
+    let zupt = TZupt {
+        enabled: Some(z.enabled),
+        window_s: Some(z.window_s),
+        accel_std_max_mps2: Some(z.accel_std_max),
+        gyro_max_dps: Some(r2d(z.gyro_max)),
+        rate_hz: Some(z.rate_hz),
+        velocity_std_mps: Some(z.velocity_std_mps),
+        angular_rate_std_dps: Some(r2d(z.angular_rate_std)),
+        max_speed_mps: Some(z.max_speed_mps),
+    };
     TomlRoot {
         imu,
         gnss,
+        odometer,
+        heading: Some(heading),
         time: TTime {
             start: c.nav.start_time.is_finite().then_some(c.nav.start_time),
             end: c.nav.end_time,
         },
         initial,
         imu_noise,
+        vehicle: Some(vehicle),
+        nhc: Some(nhc),
+        zupt: Some(zupt),
         filter,
         output: TOutput {
             rate_hz: c.output.rate_hz,
@@ -1931,6 +2680,8 @@ fn kfgins_to_raw(y: KfYaml, w: &mut Vec<String>) -> KResult<(TomlRoot, Option<St
             outages: None,
             outage_every: None,
         }),
+        odometer: None,
+        heading: None,
         time: TTime {
             start: Some(y.starttime),
             // KF-GINS: a negative endtime means the end of the IMU file
@@ -1962,6 +2713,9 @@ fn kfgins_to_raw(y: KfYaml, w: &mut Vec<String>) -> KResult<(TomlRoot, Option<St
             accel_scale_std_ppm: l("imu_noise.accel_scale_std_ppm", n.asstd, w)?,
             corr_time_h: n.corrtime,
         },
+        vehicle: None,
+        nhc: None,
+        zupt: None,
         filter: TFilter {
             covariance_period_s: None,
             time_offset: None,

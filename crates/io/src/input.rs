@@ -139,3 +139,32 @@ pub struct OutputSpec {
     /// `solution.csv` with a header row.
     pub csv: bool,
 }
+
+/// What an odometer file holds (docs/FORMATS.md "Odometer").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum OdometerFormat {
+    /// 2 columns `t speed_mps`. `speed_is_mean`: the speed is the mean since the
+    /// previous record (interval = t - t_prev; the first record only starts the
+    /// intervals); false = instantaneous (interval 0).
+    Speed { speed_is_mean: bool },
+    /// 2 columns `t cumulative_pulses`: speed = meters_per_pulse dN / dt over the
+    /// interval since the previous record (the first record only starts the count).
+    Pulses { meters_per_pulse: f64 },
+    /// The simulator's odometer.txt, 4 columns `t cumulative_pulses
+    /// pulses_in_interval speed`: read like `Pulses` from the cumulative count.
+    Navfuse { meters_per_pulse: f64 },
+}
+
+/// Where the odometer data come from. Times are on the IMU time scale.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OdometerSource {
+    pub path: PathBuf,
+    pub format: OdometerFormat,
+}
+
+/// Where the dual-antenna heading comes from: 3 columns `t heading_deg std_deg`
+/// (docs/FORMATS.md "Heading"). Times are on the GNSS time scale.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HeadingSource {
+    pub path: PathBuf,
+}

@@ -3,9 +3,11 @@
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 
+use navfuse_core::config::NhcMode;
 use navfuse_io::config::{load, load_toml, parse_toml_str, ConfigError, RunConfig};
 use navfuse_io::input::{
-    AccelUnit, GnssFormat, GyroUnit, ImuFormat, ImuQuantity, RateSampling, TimeScale, TimeUnit,
+    AccelUnit, GnssFormat, GyroUnit, ImuFormat, ImuQuantity, OdometerFormat, RateSampling,
+    TimeScale, TimeUnit,
 };
 
 const D2R: f64 = PI / 180.0;
@@ -68,6 +70,48 @@ velocity_std_mps = 0.1
 gate_probability = 1e-4
 outages = [[100.0, 160.0], [300, 330]]
 outage_every = { length_s = 60, period_s = 180, from = 456900, until = 459500 }
+
+[odometer]
+file = "odo/odometer.txt"
+format = "pulses"
+meters_per_pulse = 0.00324
+std_mps = 0.08
+scale_ppm = 500
+scale_std_ppm = 2000
+scale_random_walk_ppm_per_sqrth = 30
+with_nhc = true
+gate_probability = false
+
+[heading]
+file = "heading.txt"
+baseline_m = [0.0, 1.5, 0.0]
+std_deg = 0.25
+course_over_ground = true
+course_min_speed_mps = 4
+course_std_floor_deg = 2
+gate_probability = 1e-3
+
+[vehicle]
+mounting_rpy_deg = [0.5, -1.0, 2.0]
+lever_arm_m = [-1.2, 0.0, 0.8]
+mounting_std_deg = 1.5
+
+[nhc]
+mode = "outage"
+std_mps = [0.2, 0.1]
+rate_hz = 20
+outage_after_s = 2.5
+gate_probability = 1e-3
+min_speed_mps = 1.0
+
+[zupt]
+enabled = true
+window_s = 0.5
+accel_std_max_mps2 = 0.1
+gyro_max_dps = 1
+rate_hz = 2
+velocity_std_mps = 0.02
+angular_rate_std_dps = 0
 
 [time]
 start = 456300.5
@@ -232,6 +276,55 @@ fn check_full(c: &RunConfig, base: &Path) {
     let t = c.nav.filter.time_offset.unwrap();
     assert_eq!((t.initial_s, t.std_s, t.random_walk), (0.02, 0.3, 1e-6));
 
+    // [odometer]
+    let o = c.odometer.as_ref().expect("odometer source");
+    assert_eq!(o.path, base.join("odo/odometer.txt"));
+    assert_eq!(
+        o.format,
+        OdometerFormat::Pulses {
+            meters_per_pulse: 0.00324
+        }
+    );
+    let od = &c.nav.odometer;
+    assert!(od.enabled && od.with_nhc);
+    assert_eq!(od.std_mps, 0.08);
+    assert!(close(od.scale_initial, 500e-6));
+    assert!(close(od.scale_std, 2000e-6));
+    assert!(close(od.scale_random_walk, (30e-6_f64).powi(2) / 3600.0));
+    assert_eq!(od.gate_probability, None);
+
+    // [heading]
+    let h = c.heading.as_ref().expect("heading source");
+    assert_eq!(h.path, base.join("heading.txt"));
+    let hd = &c.nav.heading;
+    assert_close3(hd.baseline_b.as_ref().unwrap(), [0.0, 1.5, 0.0]);
+    assert!(close(hd.dual_antenna_std_override.unwrap(), 0.25 * D2R));
+    assert!(hd.course_over_ground);
+    assert_eq!(hd.course_min_speed_mps, 4.0);
+    assert!(close(hd.course_std_floor, 2.0 * D2R));
+    assert_eq!(hd.gate_probability, Some(1e-3));
+
+    // [vehicle]
+    let v = &c.nav.vehicle;
+    assert_close3(&v.mounting_rpy, [0.5 * D2R, -D2R, 2.0 * D2R]);
+    assert_close3(&v.lever_arm_b, [-1.2, 0.0, 0.8]);
+    assert!(close(v.mounting_std, 1.5 * D2R));
+
+    // [nhc]
+    let n = &c.nav.nhc;
+    assert_eq!(n.mode, NhcMode::DuringOutage);
+    assert_eq!(n.std_mps, [0.2, 0.1]);
+    assert_eq!((n.rate_hz, n.outage_after_s), (20.0, 2.5));
+    assert_eq!(n.gate_probability, Some(1e-3));
+    assert_eq!(n.min_speed_mps, 1.0);
+
+    // [zupt]
+    let z = &c.nav.zupt;
+    assert!(z.enabled);
+    assert_eq!((z.window_s, z.accel_std_max, z.rate_hz), (0.5, 0.1, 2.0));
+    assert!(close(z.gyro_max, D2R));
+    assert_eq!((z.velocity_std_mps, z.angular_rate_std), (0.02, 0.0));
+
     // [output]
     assert_eq!(c.output.rate_hz, Some(10.0));
     assert!(!c.output.imu_err && !c.output.std && c.output.csv);
@@ -259,7 +352,15 @@ fn to_toml_round_trip_keeps_every_key() {
     check_full(&d, p.parent().unwrap());
     assert_eq!(d.imu, c.imu);
     assert_eq!(d.gnss, c.gnss);
+    assert_eq!(d.odometer, c.odometer);
+    assert_eq!(d.heading, c.heading);
     assert_eq!(d.output, c.output);
+    // the vehicle and aiding options come back bit for bit
+    assert_eq!(d.nav.vehicle, c.nav.vehicle);
+    assert_eq!(d.nav.nhc, c.nav.nhc);
+    assert_eq!(d.nav.odometer, c.nav.odometer);
+    assert_eq!(d.nav.heading, c.nav.heading);
+    assert_eq!(d.nav.zupt, c.nav.zupt);
     // and once more: the text is a fixed point up to rounding
     let e = load_toml(&tmp("full_rt2.toml", &d.to_toml_string())).unwrap();
     check_full(&e, p.parent().unwrap());
@@ -427,10 +528,17 @@ fn unknown_key_names_key_and_line() {
     );
 
     // unknown section
-    let text = format!("{MINIMAL}\n[odometer]\nscale = 1\n");
+    let text = format!("{MINIMAL}\n[wheel]\nscale = 1\n");
     let e = err("unknown_section.toml", &text);
-    assert_eq!(e.key.as_deref(), Some("odometer"), "{e}");
-    assert_eq!(e.line, Some(line_containing(&text, "[odometer]")), "{e}");
+    assert_eq!(e.key.as_deref(), Some("wheel"), "{e}");
+    assert_eq!(e.line, Some(line_containing(&text, "[wheel]")), "{e}");
+
+    // unknown key in a new section
+    let text = format!("{MINIMAL}\n[odometer]\nfile = \"o.txt\"\nformat = \"speed\"\nscale = 1\n");
+    let e = err("unknown_odo_key.toml", &text);
+    assert_eq!(e.key.as_deref(), Some("odometer.scale"), "{e}");
+    assert_eq!(e.line, Some(line_containing(&text, "scale = 1")), "{e}");
+    assert!(e.message.contains("scale_ppm"), "{e}");
 
     // unknown key in an inline table
     let text = format!("{MINIMAL}\n[filter]\ntime_offset = {{ estimate = true, sigma = 1 }}\n");

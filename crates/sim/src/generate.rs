@@ -591,7 +591,10 @@ fn write_events(sc: &Scenario, dir: &Path, files: &mut Vec<String>) -> Result<()
 
 /// run.toml: a navfuse run configuration for the generated files (loose coupling on
 /// gnss.txt when there are fixes, pure inertial otherwise), initialised from the truth,
-/// with the IMU noise model of the simulated grade.
+/// with the IMU noise model of the simulated grade. With an odometer: odometer.txt
+/// with the nominal K_OD, the scenario's lever arm to the reference point and the
+/// mounting estimated from zero (1 deg); with dual-antenna heading: heading.txt with
+/// the scenario's baseline. NHC and ZUPT stay off.
 fn write_run_config(sc: &Scenario, dir: &Path, files: &mut Vec<String>) -> Result<(), InputError> {
     let t0 = sc.trajectory.t_start();
     let mut g = TruthGenerator::new(&sc.trajectory, sc.rig, sc.imu.rate_hz);
@@ -644,6 +647,21 @@ fn write_run_config(sc: &Scenario, dir: &Path, files: &mut Vec<String>) -> Resul
                 l[0], l[1], l[2]
             ));
         }
+        if let Some(h) = &gs_.heading {
+            let b = h.baseline_m;
+            s.push_str(&format!(
+                "[heading]\nfile = \"heading.txt\"\nbaseline_m = [{}, {}, {}]\n\n",
+                b[0], b[1], b[2]
+            ));
+        }
+    }
+    if let Some(o) = &sc.file.odometer {
+        let l = sc.file.vehicle.imu_to_reference_m;
+        s.push_str(&format!(
+            "[odometer]\nfile = \"odometer.txt\"\nformat = \"navfuse\"\nmeters_per_pulse = {}\n\n\
+             [vehicle]\nlever_arm_m = [{}, {}, {}]\nmounting_rpy_deg = [0, 0, 0]\nmounting_std_deg = 1\n\n",
+            o.meters_per_pulse, l[0], l[1], l[2]
+        ));
     }
     s.push_str(&format!(
         "[time]\nstart = {t0}\n\n[initial]\nposition_deg_m = [{:.12}, {:.12}, {:.6}]\nvelocity_mps = [{:.9}, {:.9}, {:.9}]\nattitude_deg = [{:.9}, {:.9}, {:.9}]\n\

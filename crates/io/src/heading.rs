@@ -1,0 +1,76 @@
+//! Dual-antenna heading reader (docs/FORMATS.md "Heading"): 3 columns
+//! `t heading_deg std_deg`, the azimuth of the antenna baseline (primary to
+//! secondary antenna) from true north, clockwise, and its 1-sigma; the simulator's
+//! heading.txt.
+//!
+//! Whitespace- or comma-separated, `#` / `%` comment lines and blank lines allowed.
+//! Times are on the GNSS time scale (GPS seconds of week, like the GNSS files) and
+//! must increase strictly. Headings are accepted in [0, 360) or (-180, 180] deg
+//! (that is, -180 < heading < 360), stds must be > 0. The first bad record stops the
+//! read with an [`InputError`] naming file, line and field. A file without records
+//! gives an empty list.
+
+use crate::error::InputError;
+use crate::fmt::{field, is_comment_line, parse_f64, split_fields, LineReader};
+use navfuse_core::HeadingObs;
+use std::path::Path;
+
+const WHAT: &str = "t, heading [deg], std [deg]";
+
+/// Read a heading file; see the module documentation.
+pub fn read_heading(path: &Path) -> Result<Vec<HeadingObs>, InputError> {
+    let mut lines = LineReader::open(path)?;
+    let mut fields = Vec::with_capacity(8);
+    let mut out: Vec<HeadingObs> = Vec::new();
+    let mut prev: Option<f64> = None;
+    while let Some((ln, text)) = lines.next_line()? {
+        split_fields(text, &mut fields);
+        if is_comment_line(text, &fields) {
+            continue;
+        }
+        if fields.len() != 3 {
+            return Err(InputError::columns(path, ln, 3, WHAT, fields.len()));
+        }
+        let num = |k: usize, name: &str| -> Result<f64, InputError> {
+            let s = field(text, &fields, k);
+            match parse_f64(s) {
+                Some(v) if v.is_finite() => Ok(v),
+                Some(v) => Err(InputError::not_finite(path, ln, name, v)),
+                None => Err(InputError::not_a_number(path, ln, name, s)),
+            }
+        };
+        let t = num(0, "t")?;
+        match prev {
+            Some(p) if t == p => {
+                return Err(InputError::at_field(
+                    path,
+                    ln,
+                    "time",
+                    format!("duplicate record: time {t} repeats the previous record"),
+                ))
+            }
+            Some(p) if t < p => return Err(InputError::backwards(path, ln, t, p)),
+            _ => {}
+        }
+        prev = Some(t);
+        let heading = num(1, "heading")?;
+        if !(heading > -180.0 && heading < 360.0) {
+            return Err(InputError::at_field(
+                path,
+                ln,
+                "heading",
+                format!("expected a heading in [0, 360) or (-180, 180] deg, found {heading}"),
+            ));
+        }
+        let std = num(2, "std")?;
+        if std <= 0.0 {
+            return Err(InputError::std_not_positive(path, ln, "std", std));
+        }
+        out.push(HeadingObs {
+            t,
+            heading_rad: heading.to_radians(),
+            std_rad: std.to_radians(),
+        });
+    }
+    Ok(out)
+}

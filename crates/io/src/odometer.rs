@@ -1,0 +1,143 @@
+//! Odometer readers (docs/FORMATS.md "Odometer"): vehicle speed from a wheel encoder
+//! or CAN bus, as speeds or cumulative pulse counts, turned into
+//! [`OdometerSample`]s (forward speed of the vehicle reference point, before the
+//! scale-factor correction, and the interval it is the mean of).
+//!
+//! Three formats, all whitespace- or comma-separated, `#` / `%` comment lines and
+//! blank lines allowed:
+//!
+//! - `speed`: `t speed_mps`;
+//! - `pulses`: `t cumulative_pulses` (speed = meters_per_pulse dN / dt);
+//! - `navfuse`: the simulator's odometer.txt, `t cumulative_pulses pulses_in_interval
+//!   speed`, read like `pulses` from the cumulative count.
+//!
+//! Times are on the IMU time scale, in the seconds-of-week convention of the IMU
+//! file; they must increase strictly. The whole file is validated; the first bad
+//! record stops the read with an [`InputError`] naming file, line and field. A file
+//! without records (or a pulse file with one record) gives an empty list.
+
+use crate::error::InputError;
+use crate::fmt::{field, is_comment_line, parse_f64, split_fields, LineReader};
+use crate::input::{OdometerFormat, OdometerSource};
+use navfuse_core::OdometerSample;
+
+/// Read an odometer file; see the module documentation.
+pub fn read_odometer(src: &OdometerSource) -> Result<Vec<OdometerSample>, InputError> {
+    let path = src.path.as_path();
+    let (ncols, what) = match src.format {
+        OdometerFormat::Speed { .. } => (2, "t, speed [m/s]"),
+        OdometerFormat::Pulses { .. } => (2, "t, cumulative pulses"),
+        OdometerFormat::Navfuse { .. } => (
+            4,
+            "t, cumulative pulses, pulses in the interval, speed [m/s]",
+        ),
+    };
+    let meters_per_pulse = match src.format {
+        OdometerFormat::Speed { .. } => None,
+        OdometerFormat::Pulses { meters_per_pulse }
+        | OdometerFormat::Navfuse { meters_per_pulse } => {
+            if !(meters_per_pulse.is_finite() && meters_per_pulse > 0.0) {
+                return Err(InputError::new(
+                    path,
+                    format!("meters_per_pulse must be a number > 0, found {meters_per_pulse}"),
+                )
+                .with_field("meters_per_pulse"));
+            }
+            Some(meters_per_pulse)
+        }
+    };
+
+    let mut lines = LineReader::open(path)?;
+    let mut fields = Vec::with_capacity(8);
+    let mut out = Vec::new();
+    // previous record: time, cumulative pulses (pulse formats)
+    let mut prev: Option<(f64, f64)> = None;
+    while let Some((ln, text)) = lines.next_line()? {
+        split_fields(text, &mut fields);
+        if is_comment_line(text, &fields) {
+            continue;
+        }
+        if fields.len() != ncols {
+            return Err(InputError::columns(path, ln, ncols, what, fields.len()));
+        }
+        let num = |k: usize, name: &str| -> Result<f64, InputError> {
+            let s = field(text, &fields, k);
+            match parse_f64(s) {
+                Some(v) if v.is_finite() => Ok(v),
+                Some(v) => Err(InputError::not_finite(path, ln, name, v)),
+                None => Err(InputError::not_a_number(path, ln, name, s)),
+            }
+        };
+        let t = num(0, "t")?;
+        if let Some((tp, _)) = prev {
+            if t == tp {
+                return Err(InputError::at_field(
+                    path,
+                    ln,
+                    "time",
+                    format!("duplicate record: time {t} repeats the previous record"),
+                ));
+            }
+            if t < tp {
+                return Err(InputError::backwards(path, ln, t, tp));
+            }
+        }
+        match src.format {
+            OdometerFormat::Speed { speed_is_mean } => {
+                let speed = num(1, "speed")?;
+                match (speed_is_mean, prev) {
+                    (false, _) => out.push(OdometerSample {
+                        t,
+                        speed_mps: speed,
+                        interval_s: 0.0,
+                    }),
+                    (true, Some((tp, _))) => out.push(OdometerSample {
+                        t,
+                        speed_mps: speed,
+                        interval_s: t - tp,
+                    }),
+                    // a mean since an unknown time: it only starts the intervals
+                    (true, None) => {}
+                }
+                prev = Some((t, 0.0));
+            }
+            OdometerFormat::Pulses { .. } | OdometerFormat::Navfuse { .. } => {
+                let pulses = num(1, "pulses")?;
+                if let OdometerFormat::Navfuse { .. } = src.format {
+                    let n = num(2, "pulses_in_interval")?;
+                    if n < 0.0 {
+                        return Err(InputError::at_field(
+                            path,
+                            ln,
+                            "pulses_in_interval",
+                            format!("expected a pulse count >= 0, found {n}"),
+                        ));
+                    }
+                    num(3, "speed")?;
+                }
+                if let Some((tp, np)) = prev {
+                    if pulses < np {
+                        return Err(InputError::at_field(
+                            path,
+                            ln,
+                            "pulses",
+                            format!(
+                                "cumulative pulse count {pulses} goes backwards (previous {np}): \
+                                 expected a non-decreasing count"
+                            ),
+                        ));
+                    }
+                    let dt = t - tp;
+                    let k = meters_per_pulse.unwrap_or(0.0);
+                    out.push(OdometerSample {
+                        t,
+                        speed_mps: k * (pulses - np) / dt,
+                        interval_s: dt,
+                    });
+                }
+                prev = Some((t, pulses));
+            }
+        }
+    }
+    Ok(out)
+}
