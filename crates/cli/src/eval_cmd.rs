@@ -14,12 +14,12 @@ use std::path::Path;
 const WEEK_S: f64 = 604_800.0;
 
 /// A trajectory with its GPS week (0 = unknown, times are seconds of week).
-struct Track {
-    week: u32,
-    points: Vec<TrajPoint>,
+pub(crate) struct Track {
+    pub week: u32,
+    pub points: Vec<TrajPoint>,
 }
 
-fn load_nav(path: &Path) -> Result<Track> {
+pub(crate) fn load_nav(path: &Path) -> Result<Track> {
     let rows = read_nav(path).map_err(|e| anyhow::anyhow!("{e}"))?;
     let week = rows.first().map_or(0, |r| r.0);
     let points = rows

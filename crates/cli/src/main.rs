@@ -1,9 +1,10 @@
 //! `navfuse`: the command line. Subcommands live in their own files:
 //! `run_cmd` (the navigator over files), `eval_cmd` (scoring), `bench_cmd` (speed),
-//! `sim_cmd` (the simulator).
+//! `sim_cmd` (the simulator), `reproduce_cmd` (the papers' experiments).
 
 mod bench_cmd;
 mod eval_cmd;
+mod reproduce_cmd;
 mod run_cmd;
 mod sim_cmd;
 
@@ -106,6 +107,32 @@ enum Command {
         #[arg(long, short)]
         quiet: bool,
     },
+    /// Reproduce a paper's experiment on the simulator (SYSTEM.md §7): seed001 (heading
+    /// from GNSS), seed002 (NHC with GNSS outages), seed004 (INS + odometer, no GNSS).
+    ///
+    /// Simulates the experiment's scenario for each seed, runs every navigator variant
+    /// on the same data, scores it against the truth and prints mean [min, max] over the
+    /// seeds beside the paper's figures, with the improvement (seed 002 eq. 18).
+    Reproduce {
+        /// Experiment: seed001, seed002 or seed004.
+        experiment: String,
+        /// Number of random seeds.
+        #[arg(long, default_value_t = 4)]
+        seeds: u64,
+        /// First seed (seeds are consecutive).
+        #[arg(long, default_value_t = 1)]
+        first_seed: u64,
+        /// Machine-readable output.
+        #[arg(long)]
+        json: bool,
+        /// Keep the simulated data and the solutions in DIR (default: a temporary
+        /// directory, removed at the end).
+        #[arg(long, value_name = "DIR")]
+        keep: Option<PathBuf>,
+        /// No per-run progress lines on stderr.
+        #[arg(long, short)]
+        quiet: bool,
+    },
     /// Measure speed and memory: the core filter loop without I/O (samples/s) and a full
     /// run writing KF-GINS's three output files (wall time, peak memory).
     Bench {
@@ -146,6 +173,14 @@ fn main() -> ExitCode {
             seed,
             quiet,
         } => sim_cmd::main(&scenario, &out, seed, quiet),
+        Command::Reproduce {
+            experiment,
+            seeds,
+            first_seed,
+            json,
+            keep,
+            quiet,
+        } => reproduce_cmd::main(&experiment, seeds, first_seed, json, keep, quiet),
         Command::Bench {
             kf_gins,
             repeat,

@@ -1,31 +1,10 @@
 //! The simulator through the binary: perfect-IMU round trips through `navfuse run`,
 //! byte-identical reruns, and every shipped scenario loads. Needs no ../shared data.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use common::{navfuse_ok as navfuse, repo, tmp};
 use std::process::Command;
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-fn navfuse(args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_navfuse"))
-        .args(args)
-        .output()
-        .expect("run navfuse");
-    assert!(
-        out.status.success(),
-        "navfuse {args:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).into_owned()
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("navfuse-sim-test-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
-}
 
 fn json_at(v: &serde_json::Value, path: &[&str]) -> f64 {
     let mut x = v;
