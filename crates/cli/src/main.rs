@@ -4,6 +4,7 @@
 
 mod bench_cmd;
 mod eval_cmd;
+mod gnss_input;
 mod reproduce_cmd;
 mod run_cmd;
 mod sim_cmd;
@@ -114,7 +115,7 @@ enum Command {
     /// on the same data, scores it against the truth and prints mean [min, max] over the
     /// seeds beside the paper's figures, with the improvement (seed 002 eq. 18).
     Reproduce {
-        /// Experiment: seed001, seed002 or seed004.
+        /// Experiment: seed000, seed001, seed002 or seed004.
         experiment: String,
         /// Number of random seeds.
         #[arg(long, default_value_t = 4)]

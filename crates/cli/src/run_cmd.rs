@@ -6,11 +6,12 @@ use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use navfuse_core::config::TimeOffsetConfig;
 use navfuse_core::outage::OutageSchedule;
-use navfuse_core::{GnssFix, HeadingObs, Navigator, OdometerSample, RunSummary};
+use navfuse_core::{GnssFix, GnssRawEpoch, HeadingObs, Navigator, OdometerSample, RunSummary};
 use navfuse_io::config::{self, RunConfig};
 use navfuse_io::gnss::read_gnss;
 use navfuse_io::heading::read_heading;
 use navfuse_io::imu::open_imu;
+use navfuse_io::input::{Coupling, GnssFormat, GnssSource};
 use navfuse_io::nav::{CsvWriter, ImuErrWriter, NavWriter, SolutionRecord, StdWriter};
 use navfuse_io::odometer::read_odometer;
 use std::io::Write;
@@ -172,7 +173,24 @@ pub fn run_job(mut cfg: RunConfig, out_dir: &Path, progress: bool) -> Result<Job
     let mut reader = open_imu(&cfg.imu).map_err(|e| anyhow::anyhow!("{e}"))?;
     let imu_week = reader.gps_week();
     let mut time_offset_pass1 = None;
+    let mut raw: Vec<GnssRawEpoch> = Vec::new();
     let (mut fixes, gnss_week): (Vec<GnssFix>, Option<u32>) = match &cfg.gnss {
+        Some(
+            src @ GnssSource {
+                format: GnssFormat::Rinex(r),
+                ..
+            },
+        ) => {
+            let g = crate::gnss_input::load_rinex(src, r)?;
+            input_notes.extend(g.notes);
+            match r.coupling {
+                Coupling::Loose => (g.fixes, Some(g.gps_week)),
+                Coupling::Tight => {
+                    raw = g.raw;
+                    (Vec::new(), Some(g.gps_week))
+                }
+            }
+        }
         Some(src) => {
             let g = read_gnss(src).map_err(|e| anyhow::anyhow!("{e}"))?;
             if g.skipped > 0 {
@@ -213,10 +231,20 @@ pub fn run_job(mut cfg: RunConfig, out_dir: &Path, progress: bool) -> Result<Job
         if shift != 0.0 {
             fixes.iter_mut().for_each(|f| f.t += shift);
             heading.iter_mut().for_each(|h| h.t += shift);
+            for e in raw.iter_mut() {
+                e.t += shift;
+                if let Some(f) = e.fix.as_mut() {
+                    f.t += shift;
+                }
+            }
         }
     }
     let week = imu_week.or(gnss_week).unwrap_or(0);
-    let measurements = navfuse_core::merge_measurements(&fixes, &odometer, &heading);
+    let last_gnss_t = raw.last().map(|e| e.t).or(fixes.last().map(|f| f.t));
+    let measurements = navfuse_core::merge_raw_epochs(
+        navfuse_core::merge_measurements(&fixes, &odometer, &heading),
+        raw,
+    );
 
     let first = match reader.next() {
         Some(Ok(s)) => s,
@@ -297,11 +325,7 @@ pub fn run_job(mut cfg: RunConfig, out_dir: &Path, progress: bool) -> Result<Job
         None
     };
 
-    let t_end = cfg
-        .nav
-        .end_time
-        .or(fixes.last().map(|f| f.t))
-        .unwrap_or(run_start);
+    let t_end = cfg.nav.end_time.or(last_gnss_t).unwrap_or(run_start);
     let bar = if progress && t_end > run_start {
         let b = ProgressBar::new(((t_end - run_start) * 10.0) as u64);
         b.set_style(

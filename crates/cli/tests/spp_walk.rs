@@ -206,6 +206,7 @@ fn run_ours(
                         prn: s.prn,
                         pseudorange_m: pr,
                         doppler_hz: s.doppler_hz,
+                        dgps_prc_m: None,
                     })
                 })
                 .collect();

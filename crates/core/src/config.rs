@@ -113,6 +113,78 @@ pub struct GnssOptions {
     pub outages: OutageSchedule,
 }
 
+/// Which range rate tight coupling fuses with the pseudoranges (SYSTEM.md §3b).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RangeRate {
+    /// Pseudoranges only.
+    None,
+    /// -lambda x Doppler (seed 000's "traditional" tight coupling).
+    Doppler,
+    /// Time-differenced carrier phase between consecutive epochs (seed 000 eq. 14).
+    Tdcp,
+}
+
+/// Tightly coupled GNSS: receiver clock states, per-satellite gates, cycle slips.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TightOptions {
+    /// Add the receiver clock states and fuse per-satellite measurements.
+    pub enabled: bool,
+    pub range_rate: RangeRate,
+    /// Fuse the pseudoranges (off: range rates only).
+    pub use_pseudorange: bool,
+    /// Per-satellite innovation gate, chi-square tail probability (1 dof); None = off.
+    pub gate_probability: Option<f64>,
+    /// Receiver clock bias random walk [m/sqrt(s)] and drift random walk
+    /// [m/s/sqrt(s)] (clock model x_b' = x_d + w_b, x_d' = w_d).
+    pub clock_bias_psd_sqrt: f64,
+    pub clock_drift_psd_sqrt: f64,
+    /// Initial 1-sigma of the clock drift [m/s] (the bias starts from the median
+    /// pseudorange residual with the position uncertainty as its sigma).
+    pub clock_drift_std0_mps: f64,
+    /// A common pseudorange residual larger than this [m] is a receiver clock jump:
+    /// the bias state is reset instead of fused.
+    pub clock_reset_m: f64,
+    /// Cycle-slip test: a TDCP innovation beyond this many sigma, or beyond
+    /// `slip_min_m` metres over the interval, marks a slip (the satellite's TDCP
+    /// restarts at this epoch).
+    pub slip_sigma: f64,
+    pub slip_min_m: f64,
+    /// Longest gap between epochs over which the carrier is differenced [s].
+    pub tdcp_max_gap_s: f64,
+    /// Scale applied to all pseudorange sigmas from the GNSS layer (e.g. to cover
+    /// errors correlated in time, which the filter treats as white).
+    pub pseudorange_sigma_scale: f64,
+    /// Scale applied to range-rate (Doppler and TDCP) sigmas.
+    pub range_rate_sigma_scale: f64,
+    /// Lower bounds of the pseudorange sigma [m] and of the range-rate sigma (Doppler
+    /// and TDCP) [m/s], after scaling: for error sources the GNSS layer does not
+    /// model (e.g. Selective Availability, 100 m and 1 m/s in seed 000 Table 1).
+    pub pseudorange_sigma_floor_m: f64,
+    pub range_rate_sigma_floor_mps: f64,
+}
+
+impl Default for TightOptions {
+    fn default() -> Self {
+        TightOptions {
+            enabled: false,
+            range_rate: RangeRate::Doppler,
+            use_pseudorange: true,
+            gate_probability: Some(1e-4),
+            clock_bias_psd_sqrt: 0.1,
+            clock_drift_psd_sqrt: 0.05,
+            clock_drift_std0_mps: 100.0,
+            clock_reset_m: 1000.0,
+            slip_sigma: 6.0,
+            slip_min_m: 0.1,
+            tdcp_max_gap_s: 5.0,
+            pseudorange_sigma_scale: 1.0,
+            range_rate_sigma_scale: 1.0,
+            pseudorange_sigma_floor_m: 0.0,
+            range_rate_sigma_floor_mps: 0.0,
+        }
+    }
+}
+
 /// Default `GnssOptions::gate_timeout_s` [s].
 pub const DEFAULT_GATE_TIMEOUT_S: f64 = 5.0;
 
@@ -322,6 +394,8 @@ impl Default for ZuptOptions {
 #[derive(Clone, Debug, PartialEq)]
 pub struct NavConfig {
     pub imu_noise: ImuNoise,
+    /// Tight coupling (used when the GNSS input is per-satellite measurements).
+    pub tight: TightOptions,
     pub initial: InitialState,
     pub gnss: GnssOptions,
     pub filter: FilterOptions,

@@ -12,19 +12,22 @@
 //! non-holonomic constraint while moving (aiding/nhc.rs, aiding/zero_velocity.rs).
 
 use crate::aiding::heading::HeadingAxis;
-use crate::aiding::{Aiding, AidingContext, VehicleEstimate};
+use crate::aiding::tdcp::{Interval, TdcpPrevious};
+use crate::aiding::{Aiding, AidingContext, ReceiverClock, VehicleEstimate};
 use crate::alignment;
 use crate::attitude::{
     c_bn_from_euler, euler_from_c_bn, euler_from_q_bn, q_bn_from_euler, quat_from_rotvec,
 };
-use crate::config::{AttitudeInit, NavConfig, NhcMode};
-use crate::earth::{lla_add_ned, lla_diff_ned};
+use crate::config::{AttitudeInit, NavConfig, NhcMode, RangeRate};
+use crate::earth::{c_ne, lla_add_ned, lla_diff_ned, lla_to_ecef};
 use crate::error_model::{fill_f, fill_qc, Discretizer, MeanMotion};
 use crate::filter::{chi2_threshold, Eskf, UpdateOutcome};
 use crate::mechanization::Mechanizer;
 use crate::state::{Block, StateLayout, ATT, BA, BG, N_INS, POS, SA, SG, VEL};
 use crate::static_detect::StaticDetector;
-use crate::types::{GnssFix, HeadingObs, ImuErrors, ImuSample, Measurement, NavState};
+use crate::types::{
+    GnssFix, GnssRawEpoch, HeadingObs, ImuErrors, ImuSample, Measurement, NavState, SatMeasurement,
+};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 use std::collections::{BTreeMap, VecDeque};
 
@@ -50,6 +53,17 @@ pub enum Event {
     },
     /// The vehicle came to rest / started moving (static detector).
     Static { t: f64, begins: bool },
+    /// The receiver clock bias state was (re)set from the pseudoranges: at the first
+    /// epoch, or after a clock jump of `jump_m`.
+    ClockReset { t: f64, jump_m: f64 },
+    /// A carrier-phase cycle slip (TDCP innovation `jump_m` over the interval beyond
+    /// the test `threshold_m`); the satellite's carrier differencing restarts.
+    CycleSlip {
+        t: f64,
+        prn: u8,
+        jump_m: f64,
+        threshold_m: f64,
+    },
 }
 
 impl std::fmt::Display for Event {
@@ -70,6 +84,19 @@ impl std::fmt::Display for Event {
                 f,
                 "{t:.3} aligned ({method}): roll {:.3} pitch {:.3} yaw {:.3} deg",
                 rpy_deg[0], rpy_deg[1], rpy_deg[2]
+            ),
+            Event::ClockReset { t, jump_m } => write!(
+                f,
+                "{t:.3} receiver clock bias set from the pseudoranges (step {jump_m:.1} m)"
+            ),
+            Event::CycleSlip {
+                t,
+                prn,
+                jump_m,
+                threshold_m,
+            } => write!(
+                f,
+                "{t:.3} G{prn:02} cycle slip: carrier jump {jump_m:.3} m against the INS (test {threshold_m:.3} m)"
             ),
             Event::Static { t, begins } => {
                 if *begins {
@@ -108,6 +135,8 @@ pub struct RunSummary {
     /// Final IMU mounting roll, pitch, yaw [rad] and 1-sigma of pitch and yaw, when
     /// estimated.
     pub mounting: Option<(Vector3<f64>, [f64; 2])>,
+    /// Final receiver clock bias [m] and drift [m/s], when estimated.
+    pub receiver_clock: Option<(f64, f64)>,
 }
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -159,7 +188,27 @@ pub struct Navigator {
     gnss_moving_t: f64,
     next_nhc_t: f64,
     next_zupt_t: f64,
+    tight: TightState,
     summary: RunSummary,
+}
+
+/// Tight-coupling bookkeeping: receiver clock, previous carrier phases, the INS
+/// antenna displacement since the previous epoch (for TDCP).
+#[derive(Clone, Debug, Default)]
+struct TightState {
+    clock: ReceiverClock,
+    clock_set: bool,
+    /// Previous epoch's carrier per PRN (index = PRN).
+    prev: Vec<Option<TdcpPrevious>>,
+    /// Time of the previous raw epoch.
+    prev_t: Option<f64>,
+    /// IMU displacement since the previous raw epoch from the mechanization only
+    /// (feedback jumps excluded), ECEF [m].
+    imu_displacement_ecef_m: Vector3<f64>,
+    /// ECEF position of the IMU after the last mechanization step or feedback.
+    last_imu_ecef_m: Vector3<f64>,
+    /// C_n^e C_b^n l^b at the previous epoch [m].
+    prev_lever_ecef_m: Vector3<f64>,
 }
 
 /// Chi-square gate for `dof` rows at tail probability `p`.
@@ -198,6 +247,10 @@ impl Navigator {
         if cfg.vehicle.mounting_std > 0.0 && (odo.enabled || cfg.nhc.mode != NhcMode::Off) {
             layout.push(Block::Mounting);
         }
+        if cfg.tight.enabled {
+            layout.push(Block::ClockBias);
+            layout.push(Block::ClockDrift);
+        }
         let n = layout.len();
         let ini = &cfg.initial;
         let mut p0 = DVector::zeros(n);
@@ -228,6 +281,11 @@ impl Navigator {
         if let Some(i) = layout.index(Block::Mounting) {
             p0[i] = cfg.vehicle.mounting_std.powi(2);
             p0[i + 1] = cfg.vehicle.mounting_std.powi(2);
+        }
+        // The clock states are set from the first epoch's measurements (reset_clock).
+        if let Some(i) = layout.index(Block::ClockBias) {
+            p0[i] = 1.0;
+            p0[i + 1] = cfg.tight.clock_drift_std0_mps.powi(2);
         }
         let nav = NavState {
             t: t0,
@@ -264,6 +322,11 @@ impl Navigator {
             gnss_moving_t: f64::NEG_INFINITY,
             next_nhc_t: t0,
             next_zupt_t: t0,
+            tight: TightState {
+                prev: vec![None; 256],
+                last_imu_ecef_m: lla_to_ecef(&lla),
+                ..Default::default()
+            },
             summary: RunSummary {
                 first_t: t0,
                 last_t: t0,
@@ -334,6 +397,15 @@ impl Navigator {
         let v_before = self.nav.v_n;
         let (next, info) = self.mech.step(&self.nav, &s);
         self.nav = next;
+        if self.cfg.tight.enabled {
+            let t = &mut self.tight;
+            t.clock.bias_m += t.clock.drift_mps * s.dt;
+            if self.cfg.tight.range_rate == RangeRate::Tdcp {
+                let r = lla_to_ecef(&self.nav.lla);
+                t.imu_displacement_ecef_m += r - t.last_imu_ecef_m;
+                t.last_imu_ecef_m = r;
+            }
+        }
         if s.dt > 0.0 {
             self.w_ib_b = s.dtheta / s.dt;
             self.a_n = (self.nav.v_n - v_before) / s.dt;
@@ -368,6 +440,11 @@ impl Navigator {
                 self.cfg.filter.time_offset.map_or(0.0, |t| t.random_walk),
             ),
             (Block::OdometerScale, self.cfg.odometer.scale_random_walk),
+            (Block::ClockBias, self.cfg.tight.clock_bias_psd_sqrt.powi(2)),
+            (
+                Block::ClockDrift,
+                self.cfg.tight.clock_drift_psd_sqrt.powi(2),
+            ),
         ];
         fill_f(
             &mut self.disc.f,
@@ -393,14 +470,7 @@ impl Navigator {
     /// external measurements (GNSS, heading) are also logged as events.
     pub fn fuse(&mut self, aiding: Aiding, gate: Option<f64>) -> Fused {
         self.flush_covariance();
-        let ctx = AidingContext {
-            nav: &self.nav,
-            layout: &self.layout,
-            w_ib_b: self.w_ib_b,
-            a_n: self.a_n,
-            lever_arm_b: self.cfg.gnss.lever_arm_b,
-            vehicle: self.vehicle,
-        };
+        let ctx = self.context(self.tight.clock);
         let Some(lin) = aiding.linearize(&ctx) else {
             return Fused::NotApplicable;
         };
@@ -438,6 +508,19 @@ impl Navigator {
         }
     }
 
+    /// What the aiding models see of the current solution.
+    fn context(&self, clock: ReceiverClock) -> AidingContext<'_> {
+        AidingContext {
+            nav: &self.nav,
+            layout: &self.layout,
+            w_ib_b: self.w_ib_b,
+            a_n: self.a_n,
+            lever_arm_b: self.cfg.gnss.lever_arm_b,
+            vehicle: self.vehicle,
+            clock,
+        }
+    }
+
     /// Closed-loop feedback of the error estimate, then implicit reset to zero.
     fn feedback(&mut self, dx: &DVector<f64>) {
         let d_pos = Vector3::new(dx[POS], dx[POS + 1], dx[POS + 2]);
@@ -472,6 +555,12 @@ impl Navigator {
             self.vehicle.c_bm =
                 quat_from_rotvec(&da).to_rotation_matrix().into_inner() * self.vehicle.c_bm;
         }
+        if let Some(i) = self.layout.index(Block::ClockBias) {
+            self.tight.clock.bias_m -= dx[i];
+            self.tight.clock.drift_mps -= dx[i + 1];
+        }
+        // TDCP: the displacement since the previous epoch is the mechanization's only.
+        self.tight.last_imu_ecef_m = lla_to_ecef(&self.nav.lla);
     }
 
     /// Current GNSS-IMU time offset rate [s/s].
@@ -483,6 +572,7 @@ impl Navigator {
     pub fn apply(&mut self, m: &Measurement) {
         match m {
             Measurement::Gnss(fix) => self.update_gnss(fix),
+            Measurement::GnssRaw(epoch) => self.update_tight(epoch),
             Measurement::Odometer(o) => {
                 if o.speed_mps.abs() > 1e-3 {
                     self.odo_moving_t = self.nav.t;
@@ -565,6 +655,166 @@ impl Navigator {
             }
         }
         self.prev_fix = Some(f);
+    }
+
+    /// Tightly coupled update with one receiver epoch (SYSTEM.md §3b): the clock
+    /// bias is (re)set when needed, then each satellite's pseudorange, then its range
+    /// rate (Doppler or TDCP), as scalar updates with a per-satellite gate.
+    pub fn update_tight(&mut self, epoch: &GnssRawEpoch) {
+        if !self.cfg.tight.enabled {
+            return;
+        }
+        let opt = self.cfg.tight.clone();
+        let gate = chi2_gate(1, opt.gate_probability);
+        // Sigmas: scaled, then floored (the TDCP floor is per interval of dt, shared
+        // by the two epochs' carriers).
+        let dt = self.tight.prev_t.map_or(1.0, |t0| epoch.t - t0);
+        let carrier_floor = opt.range_rate_sigma_floor_mps * dt / std::f64::consts::SQRT_2;
+        let sats: Vec<SatMeasurement> = epoch
+            .sats
+            .iter()
+            .map(|s| SatMeasurement {
+                pseudorange_std_m: (s.pseudorange_std_m * opt.pseudorange_sigma_scale)
+                    .max(opt.pseudorange_sigma_floor_m),
+                range_rate_std_mps: (s.range_rate_std_mps * opt.range_rate_sigma_scale)
+                    .max(opt.range_rate_sigma_floor_mps),
+                carrier_std_m: (s.carrier_std_m * opt.range_rate_sigma_scale).max(carrier_floor),
+                ..*s
+            })
+            .collect();
+        self.check_clock(epoch.t, &sats);
+        let mut used = false;
+        if opt.use_pseudorange {
+            for s in sats.iter().filter(|s| s.pseudorange_m.is_some()) {
+                used |= self.fuse(Aiding::Pseudorange(s), gate) == Fused::Applied;
+            }
+        }
+        match opt.range_rate {
+            RangeRate::None => {}
+            RangeRate::Doppler => {
+                for s in sats.iter().filter(|s| s.range_rate_mps.is_some()) {
+                    used |= self.fuse(Aiding::Doppler(s), gate) == Fused::Applied;
+                }
+            }
+            RangeRate::Tdcp => used |= self.fuse_tdcp(epoch.t, &sats),
+        }
+        if used {
+            self.summary.gnss_used += 1;
+            self.last_gnss_used_t = epoch.t;
+        } else {
+            self.summary.gnss_rejected += 1;
+        }
+    }
+
+    /// Set the clock bias (and drift) states from the measurements at the first
+    /// epoch, and again when the common pseudorange residual jumps by more than
+    /// `clock_reset_m` (receivers that steer their clock in millisecond steps).
+    fn check_clock(&mut self, t: f64, sats: &[SatMeasurement]) {
+        let ctx = self.context(ReceiverClock::default());
+        let (r_ant, c_ne, _) = crate::aiding::pseudorange::antenna_ecef(&ctx);
+        let v_ant = c_ne * crate::aiding::gnss_velocity::antenna_velocity(&ctx);
+        let mut bias: Vec<f64> = Vec::new();
+        let mut drift: Vec<f64> = Vec::new();
+        for s in sats {
+            let d = s.sat_pos_ecef_m - r_ant;
+            if let Some(p) = s.pseudorange_m {
+                bias.push(p - d.norm());
+            }
+            if let Some(rr) = s.range_rate_mps {
+                drift.push(rr - d.normalize().dot(&(s.sat_vel_ecef_mps - v_ant)));
+            }
+        }
+        let Some(b) = median(&mut bias) else {
+            return;
+        };
+        let jump = b - self.tight.clock.bias_m;
+        if self.tight.clock_set && jump.abs() <= self.cfg.tight.clock_reset_m {
+            return;
+        }
+        let i = self.layout.index(Block::ClockBias).expect("tight layout");
+        self.flush_covariance();
+        // The bias absorbs the antenna position error: its sigma is the position's.
+        let pos_var: f64 = (0..3).map(|k| self.filter.p[(POS + k, POS + k)]).sum();
+        self.filter.reset_state(i, pos_var + 10.0f64.powi(2));
+        self.tight.clock.bias_m = b;
+        if !self.tight.clock_set {
+            if let Some(d) = median(&mut drift) {
+                let vel_var: f64 = (0..3).map(|k| self.filter.p[(VEL + k, VEL + k)]).sum();
+                self.filter.reset_state(i + 1, vel_var + 1.0);
+                self.tight.clock.drift_mps = d;
+            }
+        }
+        self.tight.clock_set = true;
+        self.summary
+            .events
+            .push(Event::ClockReset { t, jump_m: jump });
+    }
+
+    /// TDCP updates for the satellites tracked continuously since the previous
+    /// epoch, with the INS-predicted cycle-slip test; then remember this epoch.
+    fn fuse_tdcp(&mut self, t: f64, sats: &[SatMeasurement]) -> bool {
+        let opt = self.cfg.tight.clone();
+        let c_bn = self.nav.q_bn.to_rotation_matrix().into_inner();
+        let lever_ecef = c_ne(self.nav.lla.x, self.nav.lla.y) * c_bn * self.cfg.gnss.lever_arm_b;
+        let interval = self.tight.prev_t.map(|t0| Interval {
+            antenna_displacement_ecef_m: self.tight.imu_displacement_ecef_m + lever_ecef
+                - self.tight.prev_lever_ecef_m,
+            dt_s: t - t0,
+        });
+        let mut used = false;
+        for s in sats {
+            let (Some(iv), Some(prev)) = (interval, self.tight.prev[s.prn as usize]) else {
+                continue;
+            };
+            if s.lost_lock || s.carrier_m.is_none() || iv.dt_s > opt.tdcp_max_gap_s {
+                continue;
+            }
+            // Cycle-slip test against the INS prediction (innovation and its sigma).
+            if let Some((y, s_var)) = self.innovation(Aiding::Tdcp(s, prev, iv)) {
+                let threshold = (opt.slip_sigma * s_var.sqrt()).max(opt.slip_min_m / iv.dt_s);
+                if y.abs() > threshold {
+                    self.summary.events.push(Event::CycleSlip {
+                        t,
+                        prn: s.prn,
+                        jump_m: y * iv.dt_s,
+                        threshold_m: threshold * iv.dt_s,
+                    });
+                    *self.summary.aiding_rejected.entry("tdcp").or_default() += 1;
+                    continue;
+                }
+                used |= self.fuse(Aiding::Tdcp(s, prev, iv), None) == Fused::Applied;
+            }
+        }
+        // Remember this epoch (after the updates: the displacement restarts here).
+        for p in self.tight.prev.iter_mut() {
+            *p = None;
+        }
+        for s in sats {
+            if let Some(c) = s.carrier_m {
+                self.tight.prev[s.prn as usize] = Some(TdcpPrevious {
+                    t,
+                    sat_pos_ecef_m: s.sat_pos_ecef_m,
+                    carrier_m: c,
+                    carrier_std_m: s.carrier_std_m,
+                });
+            }
+        }
+        let c_bn = self.nav.q_bn.to_rotation_matrix().into_inner();
+        self.tight.prev_lever_ecef_m =
+            c_ne(self.nav.lla.x, self.nav.lla.y) * c_bn * self.cfg.gnss.lever_arm_b;
+        self.tight.prev_t = Some(t);
+        self.tight.imu_displacement_ecef_m = Vector3::zeros();
+        self.tight.last_imu_ecef_m = lla_to_ecef(&self.nav.lla);
+        used
+    }
+
+    /// Innovation and its variance H P H^T + R of a one-row measurement.
+    fn innovation(&mut self, aiding: Aiding) -> Option<(f64, f64)> {
+        self.flush_covariance();
+        let ctx = self.context(self.tight.clock);
+        let lin = aiding.linearize(&ctx)?;
+        let s = (&lin.h * &self.filter.p * lin.h.transpose())[(0, 0)] + lin.r[(0, 0)];
+        Some((lin.y[0], s))
     }
 
     /// Course over ground from the fix velocity, or from the displacement since the
@@ -677,6 +927,10 @@ impl Navigator {
         if let Some(i) = self.layout.index(Block::OdometerScale) {
             self.summary.odometer_scale = Some((self.vehicle.odometer_scale, self.filter.std(i)));
         }
+        if self.layout.index(Block::ClockBias).is_some() {
+            self.summary.receiver_clock =
+                Some((self.tight.clock.bias_m, self.tight.clock.drift_mps));
+        }
         if let Some(i) = self.layout.index(Block::Mounting) {
             self.summary.mounting = Some((
                 euler_from_c_bn(&self.vehicle.c_bm),
@@ -684,6 +938,20 @@ impl Navigator {
             ));
         }
     }
+}
+
+/// Median of the values (reordered), None when empty.
+fn median(v: &mut [f64]) -> Option<f64> {
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(f64::total_cmp);
+    let m = v.len() / 2;
+    Some(if v.len() % 2 == 1 {
+        v[m]
+    } else {
+        0.5 * (v[m - 1] + v[m])
+    })
 }
 
 /// Why a run could not start or had to stop (no initial pose, numerical failure).
@@ -717,6 +985,7 @@ fn fixes_of(meas: &[Measurement]) -> Vec<GnssFix> {
     meas.iter()
         .filter_map(|m| match m {
             Measurement::Gnss(f) => Some(*f),
+            Measurement::GnssRaw(e) => e.fix,
             _ => None,
         })
         .collect()
@@ -995,7 +1264,10 @@ pub fn run<E: From<NavError>>(
             };
         t_eff <= t_start || (m.on_gnss_clock() && m.t() <= start.used_until)
     } {
-        if matches!(measurements[mi], Measurement::Gnss(_)) {
+        if matches!(
+            measurements[mi],
+            Measurement::Gnss(_) | Measurement::GnssRaw(_)
+        ) {
             n.summary.gnss_before_start += 1;
         }
         mi += 1;
@@ -1021,7 +1293,7 @@ pub fn run<E: From<NavError>>(
             }
             mi += 1;
             if m.on_gnss_clock() && cfg.gnss.outages.contains(m.t()) {
-                if matches!(m, Measurement::Gnss(_)) {
+                if matches!(m, Measurement::Gnss(_) | Measurement::GnssRaw(_)) {
                     n.summary.gnss_in_outage += 1;
                 }
                 continue;
@@ -1137,6 +1409,7 @@ mod tests {
             odometer: Default::default(),
             heading: Default::default(),
             zupt: Default::default(),
+            tight: Default::default(),
             start_time: f64::NEG_INFINITY,
             end_time: None,
         }

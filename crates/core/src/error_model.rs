@@ -138,6 +138,13 @@ pub fn fill_f(
     ) {
         f[(i, j)] = 1.0;
     }
+    // Receiver clock: bias_dot = drift.
+    if let (Some(i), Some(j)) = (
+        layout.index(Block::ClockBias),
+        layout.index(Block::ClockDrift),
+    ) {
+        f[(i, j)] = 1.0;
+    }
 }
 
 /// Diagonal of the continuous process noise G Qc G^T where G maps white noise into

@@ -104,6 +104,17 @@ impl Eskf {
     pub fn std(&self, i: usize) -> f64 {
         self.p[(i, i)].max(0.0).sqrt()
     }
+
+    /// Forget what is known about state `i`: clear its correlations and give it
+    /// variance `var` (e.g. after re-initialising the estimate).
+    pub fn reset_state(&mut self, i: usize, var: f64) {
+        let n = self.dim();
+        for j in 0..n {
+            self.p[(i, j)] = 0.0;
+            self.p[(j, i)] = 0.0;
+        }
+        self.p[(i, i)] = var;
+    }
 }
 
 /// dst (+)= lhs * rhs (or lhs * rhs^T) via faer on zero-copy views of the

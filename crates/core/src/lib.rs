@@ -23,6 +23,6 @@ pub mod types;
 
 pub use engine::{run, Navigator, RunSummary};
 pub use types::{
-    merge_measurements, GnssFix, HeadingObs, ImuErrors, ImuSample, Measurement, NavState,
-    OdometerSample,
+    merge_measurements, merge_raw_epochs, GnssFix, GnssRawEpoch, HeadingObs, ImuErrors, ImuSample,
+    Measurement, NavState, OdometerSample, SatMeasurement,
 };

@@ -1,9 +1,10 @@
 //! Error-state layout. The 21 INS states come first in a fixed order; later aiding
-//! sources append their own blocks (time offset, odometer scale, mounting; the
-//! receiver clock later) without changing the filter.
+//! sources append their own blocks (time offset, odometer scale, mounting, receiver
+//! clock) without changing the filter.
 //!
-//! Error conventions: position, velocity, attitude, time offset and vehicle states
-//! are x_est - x_true (position in NED metres, velocity NED [m/s], attitude phi with
+//! Error conventions: position, velocity, attitude, time offset, receiver clock and
+//! vehicle states are x_est - x_true (position in NED metres, velocity NED [m/s],
+//! attitude phi with
 //! C_b^n,est = (I - phi x) C_b^n,true, mounting dalpha with C_b^m,est =
 //! (I - dalpha x) C_b^m,true, odometer scale dk); the twelve IMU error states are
 //! x_true - x_est (KF-GINS), added to the estimates at feedback, in SI units (rad/s,
@@ -29,12 +30,20 @@ pub enum Block {
     /// dalpha_y; roll about the forward axis is not observable from the vehicle
     /// velocity and is not estimated).
     Mounting,
+    /// Receiver clock bias c dt_r [m] (tight coupling; seed 000 eq. 19-22).
+    ClockBias,
+    /// Receiver clock drift c dt_r' [m/s] (seed 000 eq. 23-28).
+    ClockDrift,
 }
 
 impl Block {
     pub fn len(self) -> usize {
         match self {
-            Block::TimeOffset | Block::TimeOffsetRate | Block::OdometerScale => 1,
+            Block::TimeOffset
+            | Block::TimeOffsetRate
+            | Block::OdometerScale
+            | Block::ClockBias
+            | Block::ClockDrift => 1,
             Block::Mounting => 2,
             _ => 3,
         }

@@ -5,6 +5,7 @@
 //! past 604800). The week itself, when known, travels beside the data (`gps_week`).
 
 use nalgebra::{UnitQuaternion, Vector3};
+use std::sync::Arc;
 
 /// One IMU output interval (t - dt, t], as increments in the body frame (FRD).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -32,6 +33,57 @@ pub struct GnssFix {
     pub vel_ned: Option<Vector3<f64>>,
     /// Velocity 1-sigma north, east, down [m/s], if given.
     pub vel_std_ned: Option<Vector3<f64>>,
+}
+
+/// One satellite's measurements at one epoch, prepared by the GNSS layer for tight
+/// coupling (SYSTEM.md §3b; seed 000 eq. 12-18). ECEF at the reception time.
+/// Everything the GNSS layer can model is already removed, so that
+/// `pseudorange_m = |sat_pos - antenna| + receiver clock bias [m] + noise`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SatMeasurement {
+    /// GPS PRN.
+    pub prn: u8,
+    /// Satellite position at transmission (light time solved), rotated into the ECEF
+    /// frame at reception (Sagnac) [m].
+    pub sat_pos_ecef_m: Vector3<f64>,
+    /// Its rate of change with the reception time [m/s].
+    pub sat_vel_ecef_mps: Vector3<f64>,
+    /// Elevation seen from the receiver [rad].
+    pub elevation_rad: f64,
+    /// Pseudorange with the satellite clock (relativity and TGD included) and either
+    /// the broadcast ionosphere and troposphere models or the DGPS correction
+    /// applied: geometric range + receiver clock bias [m].
+    pub pseudorange_m: Option<f64>,
+    /// 1-sigma of `pseudorange_m` (elevation weighted) [m].
+    pub pseudorange_std_m: f64,
+    /// Range rate from the Doppler, -lambda D, with the satellite clock drift (and the
+    /// DGPS range-rate correction) removed: d|sat - antenna|/dt + receiver clock
+    /// drift [m/s].
+    pub range_rate_mps: Option<f64>,
+    /// 1-sigma of `range_rate_mps` [m/s].
+    pub range_rate_std_mps: f64,
+    /// Carrier phase lambda L [m] with the satellite clock removed and, with DGPS, the
+    /// integrated range-rate correction added (never the code-based correction, whose
+    /// noise would enter the time difference). Continuous while `lost_lock` is false.
+    pub carrier_m: Option<f64>,
+    /// 1-sigma of one carrier phase [m] (elevation weighted).
+    pub carrier_std_m: f64,
+    /// Loss of lock or a cycle slip flagged by the receiver since the previous epoch
+    /// (RINEX LLI bit 0): the carrier is not continuous with the previous epoch.
+    pub lost_lock: bool,
+    /// True when a DGPS correction was applied to the pseudorange.
+    pub dgps: bool,
+}
+
+/// All satellites of one receiver epoch, for tight coupling.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GnssRawEpoch {
+    /// Time of validity (GPS time, seconds of the run's week) [s].
+    pub t: f64,
+    pub sats: Vec<SatMeasurement>,
+    /// The epoch's single point solution, when there is one: used to find the
+    /// initial position and attitude, never fused in tight coupling.
+    pub fix: Option<GnssFix>,
 }
 
 /// Navigation state of the IMU centre.
@@ -98,9 +150,11 @@ pub struct HeadingObs {
 
 /// One time-tagged aiding input, as read from files. The navigator merges them with
 /// the IMU stream in time order.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Measurement {
     Gnss(GnssFix),
+    /// Per-satellite measurements for tight coupling (shared: epochs are large).
+    GnssRaw(Arc<GnssRawEpoch>),
     Odometer(OdometerSample),
     Heading(HeadingObs),
 }
@@ -111,6 +165,7 @@ impl Measurement {
     pub fn t(&self) -> f64 {
         match self {
             Measurement::Gnss(f) => f.t,
+            Measurement::GnssRaw(e) => e.t,
             Measurement::Odometer(o) => o.t - 0.5 * o.interval_s,
             Measurement::Heading(h) => h.t,
         }
@@ -134,6 +189,14 @@ pub fn merge_measurements(
     all.extend(gnss.iter().map(|f| Measurement::Gnss(*f)));
     all.extend(odometer.iter().map(|o| Measurement::Odometer(*o)));
     all.extend(heading.iter().map(|h| Measurement::Heading(*h)));
+    all.sort_by(|a, b| a.t().total_cmp(&b.t()));
+    all
+}
+
+/// Add tight-coupling epochs to a merged list, keeping it time-sorted (stable: at
+/// equal times the epochs come after what was there).
+pub fn merge_raw_epochs(mut all: Vec<Measurement>, raw: Vec<GnssRawEpoch>) -> Vec<Measurement> {
+    all.extend(raw.into_iter().map(|e| Measurement::GnssRaw(Arc::new(e))));
     all.sort_by(|a, b| a.t().total_cmp(&b.t()));
     all
 }

@@ -1,19 +1,26 @@
 //! navfuse-gnss: the GNSS layer. GPS time, LNAV broadcast ephemeris (IS-GPS-200),
 //! signal geometry with light time and Earth rotation, Klobuchar and Saastamoinen
-//! delays, synthetic constellations, single point positioning (`spp`). Pure
-//! computation: no file I/O (RINEX files are read and written by navfuse-io). See
-//! docs/GNSS.md.
+//! delays, synthetic constellations, single point positioning (`spp`), DGPS
+//! corrections (`dgps`) and tight-coupling measurement preparation (`tight_prep`).
+//! Pure computation: no file I/O (RINEX files are read and written by navfuse-io).
+//! See docs/GNSS.md.
 
 pub mod atmosphere;
 pub mod constellation;
+pub mod dgps;
 pub mod ephemeris;
 pub mod ephemeris_set;
 pub mod geometry;
+pub mod obs;
 pub mod spp;
+pub mod tight_prep;
 pub mod time;
 
+pub use dgps::{corrections_from_reference_station, DgpsCorrection, DgpsCorrections};
 pub use ephemeris::{GpsEphemeris, SatState};
 pub use ephemeris_set::EphemerisSet;
 pub use geometry::{az_el, signal_path, SignalPath};
+pub use obs::{ObsEpoch, SatObs};
 pub use spp::{SppConfig, SppError, SppMeasurement, SppSolution, SppSolver};
+pub use tight_prep::{EpochPreparer, PreparedEpoch, TightPrepConfig};
 pub use time::{GpsTime, GpstCalendar};

@@ -55,6 +55,11 @@ pub struct SppMeasurement {
     pub pseudorange_m: f64,
     /// D1C Doppler [Hz] (positive when the satellite approaches), if measured.
     pub doppler_hz: Option<f64>,
+    /// DGPS correction to add to the pseudorange, evaluated at this epoch
+    /// (prc + rrc (t - t_s), `dgps::DgpsCorrection::at_m`) [m]. When present the
+    /// ionosphere and troposphere models are not applied to this satellite (the
+    /// correction contains them) and its variance uses `dgps_sigma_m`.
+    pub dgps_prc_m: Option<f64>,
 }
 
 /// Ionospheric correction.
@@ -107,6 +112,10 @@ pub struct SppErrorModel {
     pub tropo_model_sigma_m: f64,
     /// Tropospheric error without a model [m].
     pub tropo_none_sigma_m: f64,
+    /// Error left after a DGPS correction (reference station noise and multipath,
+    /// spatial and temporal decorrelation) [m]; replaces the URA, code bias, iono and
+    /// tropo terms for a corrected satellite.
+    pub dgps_sigma_m: f64,
     /// Doppler error [Hz] (sets the velocity covariance; the velocity fit is
     /// unweighted).
     pub doppler_sigma_hz: f64,
@@ -125,6 +134,7 @@ impl Default for SppErrorModel {
             iono_none_sigma_m: 5.0,
             tropo_model_sigma_m: 0.3,
             tropo_none_sigma_m: 3.0,
+            dgps_sigma_m: 1.0,
             doppler_sigma_hz: 1.0,
         }
     }
@@ -161,6 +171,70 @@ pub struct SppConfig {
     pub min_satellites: usize,
     /// Largest accepted GDOP (default 30).
     pub max_gdop: f64,
+}
+
+impl SppConfig {
+    /// Modelled (ionospheric, tropospheric) L1 delays [m] for a receiver at `lla`
+    /// (rad, rad, m), a satellite at `az_rad`, `el_rad`, at `sow` (GPS s of week):
+    /// Klobuchar (IS-GPS-200 20.3.3.5.2.5) and Saastamoinen as configured, else 0.
+    pub fn atmosphere_m(
+        &self,
+        lla: &Vector3<f64>,
+        az_rad: f64,
+        el_rad: f64,
+        sow: f64,
+    ) -> (f64, f64) {
+        let iono_m = match &self.iono {
+            IonoModel::Klobuchar { alpha, beta } => {
+                klobuchar_l1_delay_m(alpha, beta, lla.x, lla.y, az_rad, el_rad, sow)
+            }
+            IonoModel::None => 0.0,
+        };
+        let tropo_m = if self.tropo_saastamoinen {
+            saastamoinen_slant_m(lla.x, lla.z, el_rad)
+        } else {
+            0.0
+        };
+        (iono_m, tropo_m)
+    }
+
+    /// A priori pseudorange variance [m^2] of one satellite at `el_rad`:
+    /// F^2 (a^2 + b^2 / sin^p el) + URA^2 + sigma_cb^2 + sigma_I^2 + sigma_T^2, or
+    /// F^2 (a^2 + b^2 / sin^p el) + sigma_DGPS^2 when `dgps` (docs/GNSS.md).
+    /// `iono_m` is the modelled delay (sets sigma_I with Klobuchar).
+    pub fn pseudorange_variance_m2(
+        &self,
+        eph: &GpsEphemeris,
+        el_rad: f64,
+        iono_m: f64,
+        dgps: bool,
+    ) -> f64 {
+        let em = &self.errors;
+        let var = if dgps {
+            em.elevation_variance_m2(el_rad) + em.dgps_sigma_m.powi(2)
+        } else {
+            let iono_var = match self.iono {
+                IonoModel::Klobuchar { .. } => (em.iono_model_fraction * iono_m).powi(2),
+                IonoModel::None => em.iono_none_sigma_m.powi(2),
+            };
+            let tropo_var = if self.tropo_saastamoinen {
+                (em.tropo_model_sigma_m / (el_rad.sin() + 0.1)).powi(2)
+            } else {
+                em.tropo_none_sigma_m.powi(2)
+            };
+            let ura_var = if em.use_ura {
+                ura_variance_m2(eph.sv_accuracy_m)
+            } else {
+                0.0
+            };
+            em.elevation_variance_m2(el_rad)
+                + ura_var
+                + em.code_bias_sigma_m.powi(2)
+                + iono_var
+                + tropo_var
+        };
+        var.max(1e-6)
+    }
 }
 
 impl Default for SppConfig {
@@ -334,7 +408,9 @@ impl std::error::Error for SppError {}
 /// A measurement with its ephemeris.
 struct Candidate<'a> {
     prn: u8,
+    /// Measured pseudorange, plus the DGPS correction when `dgps` [m].
     pseudorange_m: f64,
+    dgps: bool,
     doppler_hz: Option<f64>,
     eph: &'a GpsEphemeris,
 }
@@ -401,7 +477,6 @@ fn build_rows(
     let lla = ecef_to_lla(pos_ecef_m);
     let near_surface = lla.z > NEAR_SURFACE_MIN_H_M;
     let t_true = true_rx_time(t_rx, clock_bias_m);
-    let em = &cfg.errors;
     masked.clear();
     let mut rows = Vec::with_capacity(cands.len());
     for (idx, c) in cands.iter().enumerate() {
@@ -420,46 +495,22 @@ fn build_rows(
             masked.push(c.prn);
             continue;
         }
-        let iono_m = match (&cfg.iono, near_surface) {
-            (IonoModel::Klobuchar { alpha, beta }, true) => {
-                klobuchar_l1_delay_m(alpha, beta, lla.x, lla.y, az, el, t_rx.sow)
-            }
-            _ => 0.0,
-        };
-        let tropo_m = if cfg.tropo_saastamoinen && near_surface {
-            saastamoinen_slant_m(lla.x, lla.z, el)
+        // A DGPS-corrected pseudorange already has the atmosphere removed.
+        let (iono_m, tropo_m) = if near_surface && !c.dgps {
+            cfg.atmosphere_m(&lla, az, el, t_rx.sow)
         } else {
-            0.0
+            (0.0, 0.0)
         };
         // IS-GPS-200 20.3.3.3.3.2: the L1 C/A user's clock is dt_sv - TGD.
         let sat_clock_l1_m = SPEED_OF_LIGHT_MPS * (sp.sat_clock_bias_s - c.eph.tgd_s);
         let modelled = sp.geometric_range_m + clock_bias_m - sat_clock_l1_m + iono_m + tropo_m;
-        let sin_el = el.sin();
-        let iono_var = match cfg.iono {
-            IonoModel::Klobuchar { .. } => (em.iono_model_fraction * iono_m).powi(2),
-            IonoModel::None => em.iono_none_sigma_m.powi(2),
-        };
-        let tropo_var = if cfg.tropo_saastamoinen {
-            (em.tropo_model_sigma_m / (sin_el + 0.1)).powi(2)
-        } else {
-            em.tropo_none_sigma_m.powi(2)
-        };
-        let ura_var = if em.use_ura {
-            ura_variance_m2(c.eph.sv_accuracy_m)
-        } else {
-            0.0
-        };
-        let var_m2 = em.elevation_variance_m2(el)
-            + ura_var
-            + em.code_bias_sigma_m.powi(2)
-            + iono_var
-            + tropo_var;
+        let var_m2 = cfg.pseudorange_variance_m2(c.eph, el, iono_m, c.dgps);
         let los = sp.los_unit;
         rows.push(Row {
             idx,
             h: Vector4::new(-los.x, -los.y, -los.z, 1.0),
             v_m: c.pseudorange_m - modelled,
-            var_m2: var_m2.max(1e-6),
+            var_m2,
             az_rad: az,
             el_rad: el,
             iono_m,
@@ -657,11 +708,14 @@ pub fn solve_epoch(
         if cands.iter().any(|c| c.prn == m.prn) {
             continue;
         }
-        let pr_ok = m.pseudorange_m.is_finite() && m.pseudorange_m > 0.0;
+        let pr_ok = m.pseudorange_m.is_finite()
+            && m.pseudorange_m > 0.0
+            && m.dgps_prc_m.is_none_or(f64::is_finite);
         match ephs.select(m.prn, t_rx) {
             Some(eph) if pr_ok => cands.push(Candidate {
                 prn: m.prn,
-                pseudorange_m: m.pseudorange_m,
+                pseudorange_m: m.pseudorange_m + m.dgps_prc_m.unwrap_or(0.0),
+                dgps: m.dgps_prc_m.is_some(),
                 doppler_hz: m.doppler_hz,
                 eph,
             }),
@@ -1014,6 +1068,7 @@ mod tests {
                 prn,
                 pseudorange_m: pr,
                 doppler_hz: Some(-rr / GPS_L1_WAVELENGTH_M),
+                dgps_prc_m: None,
             });
         }
         out
@@ -1077,6 +1132,47 @@ mod tests {
         let far = (tr.pos_ecef_m + Vector3::new(3e6, -1e6, 0.0), 5e5);
         let s = solve_epoch(&ephs, t_rx, &meas, &config(), Some(far)).unwrap();
         assert!((s.pos_ecef_m - tr.pos_ecef_m).norm() < 1e-3);
+    }
+
+    #[test]
+    fn dgps_corrections_replace_the_models() {
+        // Per-satellite errors, removed by a DGPS correction that also holds the
+        // atmosphere; satellites without one keep the models.
+        let (ephs, t_rx, tr, meas) = setup();
+        let clean = solve_epoch(&ephs, t_rx, &meas, &config(), None).unwrap();
+        let corrected: Vec<u8> = clean.used_prns.iter().copied().step_by(2).collect();
+        let dgps: Vec<SppMeasurement> = meas
+            .iter()
+            .map(|m| match clean.satellites.iter().find(|s| s.prn == m.prn) {
+                Some(s) if corrected.contains(&m.prn) => {
+                    let err = 4.0 * f64::from(m.prn).sin();
+                    SppMeasurement {
+                        pseudorange_m: m.pseudorange_m + err,
+                        dgps_prc_m: Some(-(err + s.iono_m + s.tropo_m)),
+                        ..*m
+                    }
+                }
+                _ => *m,
+            })
+            .collect();
+        let sol = solve_epoch(&ephs, t_rx, &dgps, &config(), None).unwrap();
+        assert!((sol.pos_ecef_m - tr.pos_ecef_m).norm() < 1e-3);
+        assert!((sol.clock_bias_m - tr.clock_bias_m).abs() < 1e-3);
+        assert_eq!(sol.used_prns, clean.used_prns);
+        let em = &config().errors;
+        for s in &sol.satellites {
+            let dgps = corrected.contains(&s.prn);
+            assert_eq!(dgps, s.iono_m == 0.0 && s.tropo_m == 0.0, "G{:02}", s.prn);
+            if dgps {
+                let var = em.elevation_variance_m2(s.el_rad) + em.dgps_sigma_m.powi(2);
+                assert!((s.sigma_m - var.sqrt()).abs() < 1e-12);
+            }
+        }
+        // A non-finite correction makes the measurement unusable.
+        let mut bad = dgps.clone();
+        bad[0].dgps_prc_m = Some(f64::NAN);
+        let sol = solve_epoch(&ephs, t_rx, &bad, &config(), None).unwrap();
+        assert_eq!(sol.unusable_prns, vec![bad[0].prn]);
     }
 
     #[test]
@@ -1165,16 +1261,19 @@ mod tests {
                 prn: 31,
                 pseudorange_m: 2.1e7,
                 doppler_hz: None,
+                dgps_prc_m: None,
             },
             SppMeasurement {
                 prn: 1,
                 pseudorange_m: f64::NAN,
                 doppler_hz: None,
+                dgps_prc_m: None,
             },
             SppMeasurement {
                 prn: 2,
                 pseudorange_m: 0.0,
                 doppler_hz: None,
+                dgps_prc_m: None,
             },
         ];
         let e = solve_epoch(&ephs, t_rx, &junk, &cfg, None).unwrap_err();

@@ -17,8 +17,8 @@ use std::path::{Path, PathBuf};
 use nalgebra::Vector3;
 use navfuse_core::config::{
     AttitudeInit, FilterOptions, GnssOptions, HeadingOptions, ImuNoise, InitialState, NavConfig,
-    NhcMode, NhcOptions, OdometerOptions, TimeOffsetConfig, VehicleOptions, ZuptOptions,
-    DEFAULT_COVARIANCE_PERIOD_S, DEFAULT_GATE_TIMEOUT_S,
+    NhcMode, NhcOptions, OdometerOptions, RangeRate, TightOptions, TimeOffsetConfig,
+    VehicleOptions, ZuptOptions, DEFAULT_COVARIANCE_PERIOD_S, DEFAULT_GATE_TIMEOUT_S,
 };
 use navfuse_core::outage::{OutageSchedule, Periodic, Window};
 use navfuse_core::types::ImuErrors;
@@ -27,9 +27,9 @@ use serde::ser::SerializeSeq;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use crate::input::{
-    AccelUnit, CsvImuOptions, GnssFormat, GnssSource, GyroUnit, HeadingSource, ImuFormat,
-    ImuQuantity, ImuSource, OdometerFormat, OdometerSource, OutputSpec, RateSampling,
-    RtklibExplorerImuOptions, TimeScale, TimeUnit,
+    AccelUnit, Coupling, CsvImuOptions, DgpsKind, DgpsSource, GnssFormat, GnssSource, GyroUnit,
+    HeadingSource, ImuFormat, ImuQuantity, ImuSource, OdometerFormat, OdometerSource, OutputSpec,
+    RateSampling, RinexGnss, RtklibExplorerImuOptions, TimeScale, TimeUnit,
 };
 
 // ---------------------------------------------------------------------------------
@@ -649,6 +649,53 @@ enum TGnssFormat {
     KfGins,
     #[serde(rename = "rtklib-pos")]
     RtklibPos,
+    #[serde(rename = "rinex")]
+    Rinex,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+enum TCoupling {
+    Loose,
+    Tight,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+enum TRangeRate {
+    None,
+    Doppler,
+    Tdcp,
+}
+
+/// `[gnss.tight]`: tight-coupling tuning (core::config::TightOptions).
+#[derive(Debug, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct TTight {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    use_pseudorange: Option<bool>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    gate_probability: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    clock_bias_psd_sqrt: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    clock_drift_psd_sqrt: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    clock_reset_m: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    slip_sigma: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    slip_min_m: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    tdcp_max_gap_s: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pseudorange_sigma_scale: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    range_rate_sigma_scale: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pseudorange_sigma_floor_m: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    range_rate_sigma_floor_mps: Option<f64>,
 }
 
 #[derive(Debug, Deserialize, Serialize)]
@@ -656,6 +703,28 @@ enum TGnssFormat {
 struct TGnss {
     file: String,
     format: TGnssFormat,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    nav: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    coupling: Option<TCoupling>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    range_rate: Option<TRangeRate>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    elevation_mask_deg: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    fde: Option<bool>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    dgps: Option<bool>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    dgps_corrections: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    dgps_reference_obs: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    dgps_reference_position_deg_m: Option<Vec<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    dgps_max_age_s: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    tight: Option<TTight>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     quality: Option<Vec<u8>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -1065,10 +1134,10 @@ fn convert(raw: TomlRoot, base: &Path) -> KResult<Converted> {
     }
 
     let imu = convert_imu(&raw.imu, base)?;
-    let (gnss, gnss_opts, relative_outages) = match &raw.gnss {
+    let (gnss, gnss_opts, relative_outages, tight) = match &raw.gnss {
         Some(g) => {
-            let (src, opts, rel) = convert_gnss(g, base, start)?;
-            (Some(src), opts, rel)
+            let (src, opts, rel, tight) = convert_gnss(g, base, start)?;
+            (Some(src), opts, rel, tight)
         }
         None => (
             None,
@@ -1082,6 +1151,7 @@ fn convert(raw: TomlRoot, base: &Path) -> KResult<Converted> {
                 outages: OutageSchedule::default(),
             },
             Vec::new(),
+            TightOptions::default(),
         ),
     };
 
@@ -1300,6 +1370,7 @@ fn convert(raw: TomlRoot, base: &Path) -> KResult<Converted> {
 
     let nav = NavConfig {
         imu_noise,
+        tight,
         initial,
         gnss: gnss_opts,
         filter: FilterOptions {
@@ -1838,8 +1909,30 @@ fn convert_gnss(
     g: &TGnss,
     base: &Path,
     start: Option<f64>,
-) -> KResult<(GnssSource, GnssOptions, Vec<RelativeOutage>)> {
+) -> KResult<(GnssSource, GnssOptions, Vec<RelativeOutage>, TightOptions)> {
     let path = file_key(base, "gnss.file", &g.file)?;
+    let rinex_only = [
+        ("gnss.nav", g.nav.is_some()),
+        ("gnss.coupling", g.coupling.is_some()),
+        ("gnss.range_rate", g.range_rate.is_some()),
+        ("gnss.elevation_mask_deg", g.elevation_mask_deg.is_some()),
+        ("gnss.fde", g.fde.is_some()),
+        ("gnss.dgps", g.dgps.is_some()),
+        ("gnss.dgps_corrections", g.dgps_corrections.is_some()),
+        ("gnss.dgps_reference_obs", g.dgps_reference_obs.is_some()),
+        (
+            "gnss.dgps_reference_position_deg_m",
+            g.dgps_reference_position_deg_m.is_some(),
+        ),
+        ("gnss.dgps_max_age_s", g.dgps_max_age_s.is_some()),
+        ("gnss.tight", g.tight.is_some()),
+    ];
+    if g.format != TGnssFormat::Rinex {
+        if let Some((key, _)) = rinex_only.iter().find(|(_, set)| *set) {
+            return Err(kerr(key, "applies only to gnss.format = \"rinex\""));
+        }
+    }
+    let mut tight = TightOptions::default();
     let format = match g.format {
         TGnssFormat::KfGins => {
             if g.quality.is_some() {
@@ -1865,6 +1958,11 @@ fn convert_gnss(
                 ));
             }
             GnssFormat::RtklibPos { quality }
+        }
+        TGnssFormat::Rinex => {
+            let (rinex, t) = convert_rinex(g, base)?;
+            tight = t;
+            GnssFormat::Rinex(rinex)
         }
     };
     let decimate_s = g
@@ -2027,11 +2125,261 @@ fn convert_gnss(
         gate_timeout_s,
         outages,
     };
-    Ok((src, opts, relative))
+    Ok((src, opts, relative, tight))
 }
+
+/// `gnss.format = "rinex"`: navigation file, coupling, DGPS and `[gnss.tight]`.
+fn convert_rinex(g: &TGnss, base: &Path) -> KResult<(RinexGnss, TightOptions)> {
+    let nav = g.nav.as_deref().ok_or_else(|| {
+        kerr(
+            "gnss.nav",
+            "gnss.format = \"rinex\" needs nav = \"RINEX navigation file\"",
+        )
+    })?;
+    let nav_path = file_key(base, "gnss.nav", nav)?;
+    let coupling = match g.coupling.unwrap_or(TCoupling::Tight) {
+        TCoupling::Loose => Coupling::Loose,
+        TCoupling::Tight => Coupling::Tight,
+    };
+    let elevation_mask_deg = g.elevation_mask_deg.unwrap_or(DEFAULT_ELEVATION_MASK_DEG);
+    if !(0.0..90.0).contains(&elevation_mask_deg) {
+        return Err(kerr(
+            "gnss.elevation_mask_deg",
+            format!("expected 0 <= mask < 90 deg, got {elevation_mask_deg}"),
+        ));
+    }
+    let max_age_s = opt_or(
+        "gnss.dgps_max_age_s",
+        g.dgps_max_age_s,
+        positive,
+        same,
+        DEFAULT_DGPS_MAX_AGE_S,
+    )?;
+    let dgps =
+        match (
+            g.dgps.unwrap_or(false),
+            &g.dgps_corrections,
+            &g.dgps_reference_obs,
+        ) {
+            (false, _, _) => None,
+            (true, Some(_), Some(_)) => {
+                return Err(kerr(
+                    "gnss.dgps_corrections",
+                    "give either dgps_corrections or dgps_reference_obs, not both",
+                ))
+            }
+            (true, Some(f), None) => Some(DgpsKind::Corrections(file_key(
+                base,
+                "gnss.dgps_corrections",
+                f,
+            )?)),
+            (true, None, Some(f)) => {
+                let key = "gnss.dgps_reference_position_deg_m";
+                let p = g.dgps_reference_position_deg_m.as_deref().ok_or_else(|| {
+                    kerr(
+                        key,
+                        "dgps_reference_obs needs the station's [lat_deg, lon_deg, h_m]",
+                    )
+                })?;
+                let p = v3(key, p)?;
+                Some(DgpsKind::ReferenceStation {
+                    obs_path: file_key(base, "gnss.dgps_reference_obs", f)?,
+                    position_lla: [p[0] * D2R, p[1] * D2R, p[2]],
+                })
+            }
+            (true, None, None) => return Err(kerr(
+                "gnss.dgps",
+                "dgps = true needs dgps_corrections = \"FILE\" or dgps_reference_obs = \"FILE\"",
+            )),
+        }
+        .map(|kind| DgpsSource { kind, max_age_s });
+    let mut t = TightOptions {
+        enabled: coupling == Coupling::Tight,
+        range_rate: match g.range_rate.unwrap_or(TRangeRate::Doppler) {
+            TRangeRate::None => RangeRate::None,
+            TRangeRate::Doppler => RangeRate::Doppler,
+            TRangeRate::Tdcp => RangeRate::Tdcp,
+        },
+        ..TightOptions::default()
+    };
+    if let Some(x) = &g.tight {
+        let d = t.clone();
+        let k = |name: &str| format!("gnss.tight.{name}");
+        t.use_pseudorange = x.use_pseudorange.unwrap_or(d.use_pseudorange);
+        t.gate_probability = match x.gate_probability {
+            None => d.gate_probability,
+            Some(p) if p == 0.0 => None,
+            Some(p) if p > 0.0 && p < 1.0 => Some(p),
+            Some(p) => {
+                return Err(kerr(
+                    &k("gate_probability"),
+                    format!("expected a probability in (0, 1), or 0 to turn the gate off, got {p}"),
+                ))
+            }
+        };
+        t.clock_bias_psd_sqrt = opt_or(
+            &k("clock_bias_psd_sqrt"),
+            x.clock_bias_psd_sqrt,
+            positive,
+            same,
+            d.clock_bias_psd_sqrt,
+        )?;
+        t.clock_drift_psd_sqrt = opt_or(
+            &k("clock_drift_psd_sqrt"),
+            x.clock_drift_psd_sqrt,
+            positive,
+            same,
+            d.clock_drift_psd_sqrt,
+        )?;
+        t.clock_reset_m = opt_or(
+            &k("clock_reset_m"),
+            x.clock_reset_m,
+            positive,
+            same,
+            d.clock_reset_m,
+        )?;
+        t.slip_sigma = opt_or(&k("slip_sigma"), x.slip_sigma, positive, same, d.slip_sigma)?;
+        t.slip_min_m = opt_or(
+            &k("slip_min_m"),
+            x.slip_min_m,
+            non_negative,
+            same,
+            d.slip_min_m,
+        )?;
+        t.tdcp_max_gap_s = opt_or(
+            &k("tdcp_max_gap_s"),
+            x.tdcp_max_gap_s,
+            positive,
+            same,
+            d.tdcp_max_gap_s,
+        )?;
+        t.pseudorange_sigma_scale = opt_or(
+            &k("pseudorange_sigma_scale"),
+            x.pseudorange_sigma_scale,
+            positive,
+            same,
+            d.pseudorange_sigma_scale,
+        )?;
+        t.range_rate_sigma_scale = opt_or(
+            &k("range_rate_sigma_scale"),
+            x.range_rate_sigma_scale,
+            positive,
+            same,
+            d.range_rate_sigma_scale,
+        )?;
+        t.pseudorange_sigma_floor_m = opt_or(
+            &k("pseudorange_sigma_floor_m"),
+            x.pseudorange_sigma_floor_m,
+            non_negative,
+            same,
+            d.pseudorange_sigma_floor_m,
+        )?;
+        t.range_rate_sigma_floor_mps = opt_or(
+            &k("range_rate_sigma_floor_mps"),
+            x.range_rate_sigma_floor_mps,
+            non_negative,
+            same,
+            d.range_rate_sigma_floor_mps,
+        )?;
+    }
+    Ok((
+        RinexGnss {
+            nav_path,
+            coupling,
+            elevation_mask_deg,
+            fde: g.fde.unwrap_or(true),
+            dgps,
+        },
+        t,
+    ))
+}
+
+/// Default `gnss.elevation_mask_deg`.
+pub const DEFAULT_ELEVATION_MASK_DEG: f64 = 10.0;
+/// Default `gnss.dgps_max_age_s`.
+pub const DEFAULT_DGPS_MAX_AGE_S: f64 = 30.0;
 
 // ---------------------------------------------------------------------------------
 // RunConfig -> TOML (user units)
+
+impl TGnss {
+    /// The RINEX-only keys, absent (for struct update syntax).
+    fn no_rinex() -> TGnss {
+        TGnss {
+            file: String::new(),
+            format: TGnssFormat::KfGins,
+            nav: None,
+            coupling: None,
+            range_rate: None,
+            elevation_mask_deg: None,
+            fde: None,
+            dgps: None,
+            dgps_corrections: None,
+            dgps_reference_obs: None,
+            dgps_reference_position_deg_m: None,
+            dgps_max_age_s: None,
+            tight: None,
+            quality: None,
+            decimate_s: None,
+            time_offset_s: None,
+            lever_arm_m: None,
+            use_velocity: None,
+            position_std_m: None,
+            velocity_std_mps: None,
+            gate_probability: None,
+            gate_timeout_s: None,
+            outages: None,
+            outage_every: None,
+        }
+    }
+}
+
+fn rinex_to_toml(r: &RinexGnss, tight: &TightOptions, t: &mut TGnss) {
+    t.nav = Some(path_str(&r.nav_path));
+    t.coupling = Some(match r.coupling {
+        Coupling::Loose => TCoupling::Loose,
+        Coupling::Tight => TCoupling::Tight,
+    });
+    t.range_rate = Some(match tight.range_rate {
+        RangeRate::None => TRangeRate::None,
+        RangeRate::Doppler => TRangeRate::Doppler,
+        RangeRate::Tdcp => TRangeRate::Tdcp,
+    });
+    t.elevation_mask_deg = Some(r.elevation_mask_deg);
+    t.fde = Some(r.fde);
+    t.dgps = Some(r.dgps.is_some());
+    if let Some(d) = &r.dgps {
+        t.dgps_max_age_s = Some(d.max_age_s);
+        match &d.kind {
+            DgpsKind::Corrections(p) => t.dgps_corrections = Some(path_str(p)),
+            DgpsKind::ReferenceStation {
+                obs_path,
+                position_lla,
+            } => {
+                t.dgps_reference_obs = Some(path_str(obs_path));
+                t.dgps_reference_position_deg_m = Some(vec![
+                    position_lla[0] / D2R,
+                    position_lla[1] / D2R,
+                    position_lla[2],
+                ]);
+            }
+        }
+    }
+    t.tight = Some(TTight {
+        use_pseudorange: Some(tight.use_pseudorange),
+        gate_probability: Some(tight.gate_probability.unwrap_or(0.0)),
+        clock_bias_psd_sqrt: Some(tight.clock_bias_psd_sqrt),
+        clock_drift_psd_sqrt: Some(tight.clock_drift_psd_sqrt),
+        clock_reset_m: Some(tight.clock_reset_m),
+        slip_sigma: Some(tight.slip_sigma),
+        slip_min_m: Some(tight.slip_min_m),
+        tdcp_max_gap_s: Some(tight.tdcp_max_gap_s),
+        pseudorange_sigma_scale: Some(tight.pseudorange_sigma_scale),
+        range_rate_sigma_scale: Some(tight.range_rate_sigma_scale),
+        pseudorange_sigma_floor_m: Some(tight.pseudorange_sigma_floor_m),
+        range_rate_sigma_floor_mps: Some(tight.range_rate_sigma_floor_mps),
+    });
+}
 
 fn path_str(p: &Path) -> String {
     std::path::absolute(p)
@@ -2107,6 +2455,7 @@ fn to_raw(c: &RunConfig) -> TomlRoot {
         let (format, quality) = match &g.format {
             GnssFormat::KfGins => (TGnssFormat::KfGins, None),
             GnssFormat::RtklibPos { quality } => (TGnssFormat::RtklibPos, Some(quality.clone())),
+            GnssFormat::Rinex(_) => (TGnssFormat::Rinex, None),
         };
         let mut every: Vec<TOutageEvery> = go
             .outages
@@ -2129,7 +2478,7 @@ fn to_raw(c: &RunConfig) -> TomlRoot {
             until: r.until,
             until_start_s: r.until_start_s,
         }));
-        TGnss {
+        let mut t = TGnss {
             file: path_str(&g.path),
             format,
             quality,
@@ -2155,7 +2504,12 @@ fn to_raw(c: &RunConfig) -> TomlRoot {
                     .collect()
             }),
             outage_every: (!every.is_empty()).then_some(OneOrMany(every)),
+            ..TGnss::no_rinex()
+        };
+        if let GnssFormat::Rinex(r) = &g.format {
+            rinex_to_toml(r, &c.nav.tight, &mut t);
         }
+        t
     });
     let i = &c.nav.initial;
     let n = &c.nav.imu_noise;
@@ -2679,6 +3033,7 @@ fn kfgins_to_raw(y: KfYaml, w: &mut Vec<String>) -> KResult<(TomlRoot, Option<St
             gate_timeout_s: None,
             outages: None,
             outage_every: None,
+            ..TGnss::no_rinex()
         }),
         odometer: None,
         heading: None,

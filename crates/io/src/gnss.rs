@@ -65,10 +65,17 @@ pub fn read_gnss(src: &GnssSource) -> Result<GnssData, InputError> {
             let (e, w) = read_pos(path, src.time_offset_s)?;
             (e, w)
         }
+        GnssFormat::Rinex(_) => {
+            return Err(InputError::new(
+                path,
+                "RINEX observations are not receiver fixes: they go through the GNSS layer (navfuse run does this)",
+            )
+            .with_field("format"))
+        }
     };
     let quality: &[u8] = match &src.format {
         GnssFormat::RtklibPos { quality } => quality,
-        GnssFormat::KfGins => &[],
+        GnssFormat::KfGins | GnssFormat::Rinex(_) => &[],
     };
     let mut fixes = Vec::with_capacity(epochs.len());
     let mut skipped = 0;

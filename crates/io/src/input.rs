@@ -113,6 +113,54 @@ pub enum GnssFormat {
         /// Solution quality flags Q to keep (1 = fix, 2 = float, 5 = single ...).
         quality: Vec<u8>,
     },
+    /// RINEX 2/3 observations (the source's `path`) with a RINEX navigation file:
+    /// processed by the GNSS layer into single point fixes (loose) or per-satellite
+    /// measurements (tight).
+    Rinex(RinexGnss),
+}
+
+/// How RINEX observations are used.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Coupling {
+    /// Single point positioning fixes (position + Doppler velocity) fused as fixes.
+    Loose,
+    /// Pseudoranges and range rates fused per satellite (`NavConfig::tight`).
+    Tight,
+}
+
+/// RINEX GNSS input: navigation file, coupling, elevation mask, DGPS.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RinexGnss {
+    pub nav_path: PathBuf,
+    pub coupling: Coupling,
+    /// Satellites below this elevation are not used [deg].
+    pub elevation_mask_deg: f64,
+    /// Single point positioning's residual test with fault exclusion. Off for data
+    /// whose errors the broadcast error model does not cover (e.g. Selective
+    /// Availability), where the test would reject every epoch.
+    pub fde: bool,
+    /// DGPS corrections; None = uncorrected pseudoranges with the broadcast models.
+    pub dgps: Option<DgpsSource>,
+}
+
+/// Where DGPS pseudorange corrections come from.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DgpsSource {
+    pub kind: DgpsKind,
+    /// Corrections older than this are not applied [s].
+    pub max_age_s: f64,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum DgpsKind {
+    /// A corrections file (`t_s,prn,prc_m,rrc_mps,iode`, docs/FORMATS.md).
+    Corrections(PathBuf),
+    /// A reference station's RINEX observations at a known position
+    /// (latitude, longitude [rad], ellipsoidal height [m]).
+    ReferenceStation {
+        obs_path: PathBuf,
+        position_lla: [f64; 3],
+    },
 }
 
 #[derive(Clone, Debug, PartialEq)]

@@ -2,6 +2,7 @@
 //! [`InputError`] naming the file, line and field; none panics.
 
 pub mod config;
+pub mod dgps;
 pub mod error;
 pub mod fmt;
 pub mod gnss;

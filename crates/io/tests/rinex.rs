@@ -1,10 +1,12 @@
 //! RINEX navigation and observation readers/writers: round trips, versions, errors.
 
 use nalgebra::Vector3;
-use navfuse_gnss::{GpsEphemeris, GpsTime};
+use navfuse_gnss::{GpsEphemeris, GpsTime, GpstCalendar};
 use navfuse_io::rinex_nav::{read_rinex_nav, write_rinex3_nav};
-use navfuse_io::rinex_obs::{read_rinex3_obs, ObsHeader, RinexObsWriter, SatObs};
-use std::path::PathBuf;
+use navfuse_io::rinex_obs::{
+    read_rinex3_obs, read_rinex_obs, ObsEpoch, ObsHeader, RinexObsWriter, SatObs,
+};
+use std::path::{Path, PathBuf};
 
 fn tmp(name: &str, text: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("navfuse_rinex_{}", std::process::id()));
@@ -285,4 +287,458 @@ fn obs_reader_mixed_systems_flags_and_type_order() {
         .unwrap_err()
         .to_string();
     assert!(err.contains(":10: expected an epoch line"), "{err}");
+}
+
+// ---- RINEX 2.10/2.11 observations (fixtures in tests/data, see its README.md) ----
+
+fn data(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(name)
+}
+
+fn gpst(y: i32, mo: u32, d: u32, h: u32, mi: u32, s: f64) -> GpsTime {
+    GpsTime::from_calendar(&GpstCalendar {
+        year: y,
+        month: mo,
+        day: d,
+        hour: h,
+        minute: mi,
+        second: s,
+    })
+    .unwrap()
+}
+
+fn sat(e: &ObsEpoch, prn: u8) -> &SatObs {
+    e.sats.iter().find(|s| s.prn == prn).unwrap()
+}
+
+#[test]
+fn reads_rinex211_hand_file() {
+    let e = read_rinex_obs(&data("hand_v211.obs")).unwrap();
+    // The event (flag 4) and the cycle-slip record (flag 6) are skipped.
+    assert_eq!(e.len(), 2);
+
+    let e0 = &e[0];
+    assert_eq!(e0.t, gpst(2025, 8, 28, 18, 0, 0.0));
+    assert_eq!(e0.flag, 0);
+    assert_eq!(e0.rx_clock_offset_s, Some(-0.000123456));
+    // 14 satellites on two lines, R21 skipped, `  7` is GPS; file order kept.
+    let prns: Vec<u8> = e0.sats.iter().map(|s| s.prn).collect();
+    assert_eq!(prns, [5, 7, 8, 10, 12, 13, 15, 18, 23, 24, 27, 29, 32]);
+    // C1 (not P1) is the pseudorange; types are found wherever the header puts them
+    // (D1 is on each satellite's second line).
+    assert_eq!(
+        *sat(e0, 5),
+        SatObs {
+            prn: 5,
+            pseudorange_m: Some(20_576_396.770),
+            carrier_cycles: Some(108_129_693.934),
+            doppler_hz: Some(1_064.326),
+            cn0_dbhz: Some(51.0),
+            lli: 1,
+        }
+    );
+    assert_eq!(
+        *sat(e0, 7),
+        SatObs {
+            prn: 7,
+            pseudorange_m: Some(21_875_361.121),
+            carrier_cycles: Some(114_955_809.983),
+            doppler_hz: Some(-2_668.175),
+            cn0_dbhz: Some(36.0),
+            lli: 0,
+        }
+    );
+    // Only L2/P2/D2/S2: every L1 observable blank.
+    assert_eq!(
+        *sat(e0, 8),
+        SatObs {
+            prn: 8,
+            pseudorange_m: None,
+            carrier_cycles: None,
+            doppler_hz: None,
+            cn0_dbhz: None,
+            lli: 0,
+        }
+    );
+    // Second observation line empty: D1 absent; LLI 5 (lost lock + AS in RINEX 2).
+    let g10 = sat(e0, 10);
+    assert_eq!(
+        (
+            g10.pseudorange_m,
+            g10.carrier_cycles,
+            g10.doppler_hz,
+            g10.cn0_dbhz,
+            g10.lli
+        ),
+        (
+            Some(20_675_528.834),
+            Some(108_650_635.858),
+            None,
+            Some(47.0),
+            5
+        )
+    );
+    let g12 = sat(e0, 12);
+    assert_eq!(
+        (g12.doppler_hz, g12.cn0_dbhz, g12.lli),
+        (Some(-1_375.564), None, 2)
+    );
+    // Satellites of the continuation line.
+    let g32 = sat(e0, 32);
+    assert_eq!(
+        (g32.pseudorange_m, g32.carrier_cycles, g32.lli),
+        (Some(25_760_672.070), Some(135_373_218.079), 1)
+    );
+    assert_eq!(sat(e0, 29).doppler_hz, Some(2_175.723));
+
+    let e1 = &e[1];
+    assert_eq!(e1.t, gpst(2025, 8, 28, 18, 0, 1.0));
+    assert_eq!(e1.flag, 1);
+    assert_eq!(e1.rx_clock_offset_s, None);
+    assert_eq!(e1.sats.len(), 2);
+    assert_eq!(
+        e1.sats[0],
+        SatObs {
+            prn: 5,
+            pseudorange_m: Some(20_576_346.113),
+            carrier_cycles: Some(108_129_427.738),
+            doppler_hz: Some(1_064.871),
+            cn0_dbhz: Some(50.0),
+            lli: 1,
+        }
+    );
+    assert_eq!(
+        e1.sats[1],
+        SatObs {
+            prn: 7,
+            pseudorange_m: Some(21_875_488.073),
+            carrier_cycles: Some(114_956_476.929),
+            doppler_hz: None,
+            cn0_dbhz: None,
+            lli: 0,
+        }
+    );
+}
+
+#[test]
+fn v2_and_v3_of_the_same_epochs_agree() {
+    // walk_0827: 3 epochs as written by the receiver converter (3.04) and as converted
+    // to 2.11 by RTKLIB convbin.
+    let v3 = read_rinex_obs(&data("walk_0827_3ep_v304.obs")).unwrap();
+    let v2 = read_rinex_obs(&data("walk_0827_3ep_v211.obs")).unwrap();
+    assert_eq!(
+        v3,
+        read_rinex3_obs(&data("walk_0827_3ep_v304.obs")).unwrap()
+    );
+    assert_eq!(v2, v3);
+    assert_eq!(v2.len(), 3);
+    assert_eq!(v2[0].t, gpst(2025, 8, 28, 17, 30, 39.748));
+    assert_eq!(v2[2].t, gpst(2025, 8, 28, 17, 30, 40.248));
+    for e in &v2 {
+        let prns: Vec<u8> = e.sats.iter().map(|s| s.prn).collect();
+        assert_eq!(prns, [10, 18, 23, 27, 32, 24, 8]); // G08 on the continuation line
+        let g08 = sat(e, 8);
+        assert!(g08.pseudorange_m.is_none() && g08.carrier_cycles.is_none());
+    }
+    let g10 = sat(&v2[0], 10);
+    assert_eq!(
+        (
+            g10.pseudorange_m,
+            g10.carrier_cycles,
+            g10.doppler_hz,
+            g10.cn0_dbhz,
+            g10.lli
+        ),
+        (
+            Some(20_576_396.770),
+            Some(108_129_693.934),
+            Some(1_064.326),
+            Some(51.0),
+            1
+        )
+    );
+}
+
+#[test]
+fn v2_read_v3_write_read_round_trip() {
+    let v2 = read_rinex_obs(&data("hand_v211.obs")).unwrap();
+    let mut w = RinexObsWriter::new(Vec::new(), &obs_header()).unwrap();
+    for e in &v2 {
+        w.write_epoch(e.t, &e.sats).unwrap();
+    }
+    let text = String::from_utf8(w.finish().unwrap()).unwrap();
+    let v3 = read_rinex_obs(&tmp("hand_rt.rnx", &text)).unwrap();
+    // The writer writes flag 0 and no receiver clock offset; all else is identical.
+    let strip = |e: &[ObsEpoch]| -> Vec<ObsEpoch> {
+        e.iter()
+            .map(|e| ObsEpoch {
+                flag: 0,
+                rx_clock_offset_s: None,
+                ..e.clone()
+            })
+            .collect()
+    };
+    assert_eq!(strip(&v3), strip(&v2));
+}
+
+fn v2_header(types: &[&str]) -> String {
+    let hdr = |s: &str, l: &str| format!("{s:<60}{l}\n");
+    let mut t = hdr(
+        "     2.10           OBSERVATION DATA    G (GPS)",
+        "RINEX VERSION / TYPE",
+    );
+    let mut line = format!("{:6}", types.len());
+    for ty in types {
+        line += &format!("{ty:>6}");
+    }
+    t += &hdr(&line, "# / TYPES OF OBSERV");
+    t += &hdr("", "END OF HEADER");
+    t
+}
+
+#[test]
+fn v2_two_digit_years_pivot_at_80() {
+    let mut t = v2_header(&["C1"]);
+    for yy in ["80", "99", "00", "79"] {
+        t += &format!(" {yy}  6 30 12  0  0.0000000  0  1G01\n");
+        t += "  20000000.000\n";
+    }
+    let e = read_rinex_obs(&tmp("years.obs", &t)).unwrap();
+    let years: Vec<i32> = e.iter().map(|e| e.t.to_calendar().year).collect();
+    assert_eq!(years, [1980, 1999, 2000, 2079]);
+    assert_eq!(e[2].t, gpst(2000, 6, 30, 12, 0, 0.0));
+}
+
+#[test]
+fn v2_event_can_redefine_observation_types() {
+    let mut t = v2_header(&["C1", "L1"]);
+    t += " 25  8 28 18  0  0.0000000  0  1G01\n";
+    t += "  20000000.000   100000000.000\n";
+    // Flag 4: header records follow; the new list swaps the two types and adds one.
+    t += "                            4  2\n";
+    t += &format!("{:<60}{}\n", "new list", "COMMENT");
+    t += &format!(
+        "{:<60}{}\n",
+        "     3    L1    S1    C1", "# / TYPES OF OBSERV"
+    );
+    t += " 25  8 28 18  0  1.0000000  0  1G01\n";
+    t += &format!(
+        "{:14.3}2 {:14.3}  {:14.3}\n",
+        100_000_005.0, 45.0, 20_000_001.0
+    );
+    let e = read_rinex_obs(&tmp("redef.obs", &t)).unwrap();
+    assert_eq!(e.len(), 2);
+    let (a, b) = (&e[0].sats[0], &e[1].sats[0]);
+    assert_eq!(
+        (a.pseudorange_m, a.carrier_cycles, a.cn0_dbhz),
+        (Some(20_000_000.0), Some(100_000_000.0), None)
+    );
+    assert_eq!(
+        (b.pseudorange_m, b.carrier_cycles, b.cn0_dbhz, b.lli),
+        (Some(20_000_001.0), Some(100_000_005.0), Some(45.0), 2)
+    );
+}
+
+/// The hand-made file with `edit` applied to its (1-based) line `ln`.
+fn hand_edited(name: &str, ln: usize, edit: impl Fn(&str) -> String) -> PathBuf {
+    let text = std::fs::read_to_string(data("hand_v211.obs")).unwrap();
+    let mut out = String::new();
+    for (k, l) in text.lines().enumerate() {
+        if k + 1 == ln {
+            out += &edit(l);
+        } else {
+            out += l;
+        }
+        out.push('\n');
+    }
+    tmp(name, &out)
+}
+
+fn err_of(p: &Path) -> String {
+    read_rinex_obs(p).unwrap_err().to_string()
+}
+
+#[test]
+fn v2_errors_name_line_and_field() {
+    let cases: Vec<(PathBuf, &str)> = vec![
+        (
+            hand_edited("e1.obs", 14, |l| l.replacen("20576396.770", "2057x396.770", 1)),
+            ":14: field 'G05 C1': expected a number, found \"2057x396.770\"",
+        ),
+        (
+            hand_edited("e2.obs", 22, |l| l.replacen(".85857", ".858x7", 1)),
+            ":22: field 'G10 L1 LLI': expected a blank or a digit 0-7, found \"x\"",
+        ),
+        (
+            hand_edited("e3.obs", 12, |l| l.replacen("G10", "G1x", 1)),
+            ":12: field 'satellite list': satellite 5 of 14 (columns 45-47): expected a \
+             system letter (blank = GPS) and a 2-digit number, found \"G1x\"",
+        ),
+        (
+            hand_edited("e4.obs", 48, |l| l.trim_end_matches("  7").to_string()),
+            ":48: field 'satellite list': expected satellite 3 of 3 in columns 39-41, found a blank",
+        ),
+        (
+            hand_edited("e5.obs", 13, |_| "   G29G32".to_string()),
+            ":13: expected a continuation of the satellite list of line 12 (32 blanks, then \
+             satellites 13-14), found \"   G29G32\"",
+        ),
+        (
+            hand_edited("e6.obs", 8, |l| l.replacen("    10", "    11", 1)),
+            ":9: field '# / TYPES OF OBSERV': the number of types (11, columns 1-6) does not \
+             match the types listed (10: P1 L1 C1 S1 L2 P2 D1 D2 S2 C5)",
+        ),
+        (
+            hand_edited("e7.obs", 9, |l| l.replacen("     ", "    2", 1)),
+            ":8: field '# / TYPES OF OBSERV': the number of types (10, columns 1-6) does \
+             not match the types listed (9: P1 L1 C1 S1 L2 P2 D1 D2 S2)",
+        ),
+        (
+            hand_edited("e8.obs", 12, |l| l.replacen(" 25  8", " 25 13", 1)),
+            ":12: field 'month': expected 1..12, found 13",
+        ),
+        (
+            hand_edited("e9.obs", 48, |l| l.replacen("1.0000000  1", "1.0000000  x", 1)),
+            ":48: field 'epoch flag': expected an integer, found \"x\"",
+        ),
+        (
+            hand_edited("e10.obs", 48, |l| l.replacen(" 1.0000000", "  1.00.000", 1)),
+            ":48: field 'second': expected a number, found \"1.00.000\"",
+        ),
+        (
+            hand_edited("e11.obs", 12, |l| l.replacen("-0.000123456", "-0.00012345x", 1)),
+            ":12: field 'receiver clock offset': expected a number, found \"-0.00012345x\"",
+        ),
+        (
+            hand_edited("e12.obs", 12, |l| l.replacen("G05", "G64", 1)),
+            ":12: field 'satellite list': satellite 1 of 14: expected a GPS PRN 1..63, found 64",
+        ),
+        (
+            hand_edited("e13.obs", 12, |l| l.replacen(" 25  8 28", " 25  2 30", 1)),
+            ":12: field 'epoch': expected a valid GPST date and time, found 2025-02-30 18:00:0",
+        ),
+        (
+            hand_edited("e14.obs", 42, |l| l.replacen("4  2", "4  3", 1)),
+            // The 3rd "header record" is the flag 6 epoch line; then the epoch's
+            // observation line is read as an epoch line.
+            ":46: field 'year': expected an integer, found \"\"",
+        ),
+        (
+            hand_edited("e15.obs", 1, |l| l.replacen("2.11", "4.00", 1)),
+            ":1: field 'RINEX version': version 4 is not supported (2.10, 2.11 and 3.0x are)",
+        ),
+        (
+            hand_edited("e16.obs", 1, |l| l.replacen("OBSERVATION DATA", "NAVIGATION DATA ", 1)),
+            ":1: field 'file type': expected an observation file (type O in column 21), \
+             found \"N\"",
+        ),
+        (
+            hand_edited("e17.obs", 8, |l| l.replacen("TYPES OF OBSERV", "TYPES OF OBS   ", 1)),
+            ":9: field '# / TYPES OF OBSERV': expected the number of observation types in \
+             columns 1-6",
+        ),
+        (
+            hand_edited("e18.obs", 1, |l| {
+                format!("{:<60}CRINEX VERS   / TYPE", &l[..20])
+            }),
+            ":1: Hatanaka-compressed (CRINEX) files are not supported",
+        ),
+    ];
+    for (p, want) in &cases {
+        let err = err_of(p);
+        assert!(err.contains(want), "want {want}\n got {err}");
+        assert!(err.starts_with(&p.display().to_string()), "{err}");
+    }
+
+    // No type list at all.
+    let p = tmp(
+        "notypes.obs",
+        &v2_header(&["C1"]).replace("# / TYPES OF OBSERV", "COMMENT"),
+    );
+    assert!(
+        err_of(&p).ends_with(
+            "field '# / TYPES OF OBSERV': expected a '# / TYPES OF OBSERV' header record, \
+             found none"
+        ),
+        "{}",
+        err_of(&p)
+    );
+    // Truncated inside an epoch: the epoch line is named.
+    let text = std::fs::read_to_string(data("hand_v211.obs")).unwrap();
+    let cut = |n: usize| text.lines().take(n).collect::<Vec<_>>().join("\n") + "\n";
+    let err = err_of(&tmp("cut30.obs", &cut(30)));
+    assert!(
+        err.contains(
+            ":12: epoch truncated: expected 2 observation lines for each of 14 \
+                      satellites, the file ends in those of G18"
+        ),
+        "{err}"
+    );
+    let err = err_of(&tmp("cut12.obs", &cut(12)));
+    assert!(
+        err.contains(":12: epoch truncated: 14 satellites need 2"),
+        "{err}"
+    );
+    let err = err_of(&tmp("cut43.obs", &cut(43)));
+    assert!(
+        err.contains(":42: event truncated: expected 2 header records"),
+        "{err}"
+    );
+    let err = err_of(&tmp("cut45.obs", &cut(45)));
+    assert!(
+        err.contains(":45: epoch truncated: expected 2 cycle-slip"),
+        "{err}"
+    );
+    let err = err_of(&tmp("cut10.obs", &cut(10)));
+    assert!(err.ends_with(": no 'END OF HEADER' line"), "{err}");
+    // read_rinex3_obs stays RINEX 3 only and says where 2.xx is read.
+    let err = read_rinex3_obs(&data("hand_v211.obs"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains(
+            ":1: field 'RINEX version': version 2.11 is not supported (3.0x is; \
+                      read_rinex_obs also reads 2.10/2.11)"
+        ),
+        "{err}"
+    );
+}
+
+#[test]
+fn v2_malformed_input_never_panics() {
+    // Every line cut at every column, and every character replaced by 'x' or a blank
+    // (a byte stride keeps the run short): the reader returns Ok or Err, never panics.
+    let text = std::fs::read_to_string(data("hand_v211.obs")).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let mut n_err = 0;
+    for (i, l) in lines.iter().enumerate() {
+        for cut in (0..l.len()).step_by(3) {
+            let mut v = lines.clone();
+            let short = &l[..cut];
+            v[i] = short;
+            if read_rinex_obs(&tmp("cut.obs", &(v.join("\n") + "\n"))).is_err() {
+                n_err += 1;
+            }
+        }
+    }
+    let bytes = text.as_bytes();
+    for k in (0..bytes.len()).step_by(5) {
+        if bytes[k] == b'\n' {
+            continue;
+        }
+        for c in [b'x', b' '] {
+            let mut b = bytes.to_vec();
+            b[k] = c;
+            let p = tmp("subst.obs", std::str::from_utf8(&b).unwrap());
+            if read_rinex_obs(&p).is_err() {
+                n_err += 1;
+            }
+        }
+        // The file cut after byte k.
+        let p = tmp("prefix.obs", std::str::from_utf8(&bytes[..k]).unwrap());
+        let _ = read_rinex_obs(&p);
+    }
+    assert!(n_err > 100, "{n_err}");
 }

@@ -12,20 +12,26 @@ use crate::attitude::skew;
 use crate::earth::lla_diff_ned;
 use crate::state::{Block, ATT, POS};
 use crate::types::GnssFix;
-use nalgebra::{DMatrix, DVector, Matrix3};
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
-pub fn linearize(ctx: &AidingContext, fix: &GnssFix) -> Linearized {
-    let n = ctx.layout.len();
+/// Lever arm C_b^n l^b [m, NED] and the Jacobian (3 x n) of the INS antenna position
+/// error (NED metres) with respect to the error state.
+pub fn antenna_position_jacobian(ctx: &AidingContext) -> (Vector3<f64>, DMatrix<f64>) {
     let c_bn = ctx.nav.q_bn.to_rotation_matrix().into_inner();
     let l_n = c_bn * ctx.lever_arm_b;
-    let y3 = lla_diff_ned(&ctx.nav.lla, &fix.lla) + l_n;
-    let mut h = DMatrix::zeros(3, n);
+    let mut h = DMatrix::zeros(3, ctx.layout.len());
     h.view_mut((0, POS), (3, 3)).copy_from(&Matrix3::identity());
     h.view_mut((0, ATT), (3, 3)).copy_from(&skew(&l_n));
     if let Some(i) = ctx.layout.index(Block::TimeOffset) {
         let v_ant = super::gnss_velocity::antenna_velocity(ctx);
         h.view_mut((0, i), (3, 1)).copy_from(&v_ant);
     }
+    (l_n, h)
+}
+
+pub fn linearize(ctx: &AidingContext, fix: &GnssFix) -> Linearized {
+    let (l_n, h) = antenna_position_jacobian(ctx);
+    let y3 = lla_diff_ned(&ctx.nav.lla, &fix.lla) + l_n;
     let r = DMatrix::from_diagonal(&DVector::from_iterator(
         3,
         fix.std_ned.iter().map(|s| s * s),

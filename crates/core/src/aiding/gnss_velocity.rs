@@ -21,15 +21,14 @@ pub fn antenna_velocity(ctx: &AidingContext) -> Vector3<f64> {
     nav.v_n + c_bn * ctx.w_ib_b.cross(&ctx.lever_arm_b) - w_in.cross(&(c_bn * ctx.lever_arm_b))
 }
 
-pub fn linearize(ctx: &AidingContext, fix: &GnssFix) -> Option<Linearized> {
-    let v_meas = fix.vel_ned?;
-    let std = fix.vel_std_ned?;
+/// Antenna velocity (NED) and the Jacobian (3 x n) of its error with respect to the
+/// error state.
+pub fn antenna_velocity_jacobian(ctx: &AidingContext) -> (Vector3<f64>, DMatrix<f64>) {
     let nav = ctx.nav;
     let n = ctx.layout.len();
     let c_bn = nav.q_bn.to_rotation_matrix().into_inner();
     let l = ctx.lever_arm_b;
     let w_in = omega_ie_n(nav.lla.x) + omega_en_n(nav.lla.x, nav.lla.z, &nav.v_n);
-    let y3 = antenna_velocity(ctx) - v_meas;
     let mut h = DMatrix::zeros(3, n);
     h.view_mut((0, VEL), (3, 3)).copy_from(&Matrix3::identity());
     let h_att = skew(&(c_bn * ctx.w_ib_b.cross(&l))) - skew(&w_in) * skew(&(c_bn * l));
@@ -42,6 +41,14 @@ pub fn linearize(ctx: &AidingContext, fix: &GnssFix) -> Option<Linearized> {
         // A fix applied dtau too late sees the velocity of dtau later: + a^n dtau.
         h.view_mut((0, i), (3, 1)).copy_from(&ctx.a_n);
     }
+    (antenna_velocity(ctx), h)
+}
+
+pub fn linearize(ctx: &AidingContext, fix: &GnssFix) -> Option<Linearized> {
+    let v_meas = fix.vel_ned?;
+    let std = fix.vel_std_ned?;
+    let (v_ant, h) = antenna_velocity_jacobian(ctx);
+    let y3 = v_ant - v_meas;
     let r = DMatrix::from_diagonal(&DVector::from_iterator(3, std.iter().map(|s| s * s)));
     Some(Linearized {
         y: DVector::from_column_slice(y3.as_slice()),

@@ -4,16 +4,19 @@
 //! `vehicle_frame.rs` is shared kinematics (the vehicle reference point's velocity)
 //! for the NHC and the odometer.
 
+pub mod doppler;
 pub mod gnss_position;
 pub mod gnss_velocity;
 pub mod heading;
 pub mod nhc;
 pub mod odometer;
+pub mod pseudorange;
+pub mod tdcp;
 pub mod vehicle_frame;
 pub mod zero_velocity;
 
 use crate::state::StateLayout;
-use crate::types::{GnssFix, HeadingObs, NavState};
+use crate::types::{GnssFix, HeadingObs, NavState, SatMeasurement};
 use heading::HeadingAxis;
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
@@ -28,6 +31,15 @@ pub struct VehicleEstimate {
     pub odometer_scale: f64,
 }
 
+/// Receiver clock estimates (tight coupling; zero otherwise).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ReceiverClock {
+    /// c dt_r [m].
+    pub bias_m: f64,
+    /// c dt_r' [m/s].
+    pub drift_mps: f64,
+}
+
 /// What the aiding models may read about the current INS solution.
 pub struct AidingContext<'a> {
     pub nav: &'a NavState,
@@ -39,6 +51,7 @@ pub struct AidingContext<'a> {
     /// Antenna lever arm in the body frame [m].
     pub lever_arm_b: Vector3<f64>,
     pub vehicle: VehicleEstimate,
+    pub clock: ReceiverClock,
 }
 
 /// A linearised measurement: innovation y = h(x_est) - z ~ H dx + v, v ~ N(0, R).
@@ -68,6 +81,12 @@ pub enum Aiding<'a> {
     Zupt(f64),
     /// Zero angular rate: window-mean compensated rate [rad/s], std [rad/s].
     Zaru(Vector3<f64>, f64),
+    /// Tight coupling, one satellite: pseudorange.
+    Pseudorange(&'a SatMeasurement),
+    /// Tight coupling, one satellite: Doppler range rate.
+    Doppler(&'a SatMeasurement),
+    /// Tight coupling, one satellite: carrier phase differenced with the previous epoch.
+    Tdcp(&'a SatMeasurement, tdcp::TdcpPrevious, tdcp::Interval),
 }
 
 impl Aiding<'_> {
@@ -82,6 +101,9 @@ impl Aiding<'_> {
             Aiding::Odometer { .. } => "odometer",
             Aiding::Zupt(_) => "zupt",
             Aiding::Zaru(..) => "zaru",
+            Aiding::Pseudorange(_) => "pseudorange",
+            Aiding::Doppler(_) => "doppler",
+            Aiding::Tdcp(..) => "tdcp",
         }
     }
 
@@ -100,6 +122,9 @@ impl Aiding<'_> {
             } => Some(odometer::linearize(ctx, *speed_mps, *std_mps, *nhc_std)),
             Aiding::Zupt(std) => Some(zero_velocity::linearize_zupt(ctx, *std)),
             Aiding::Zaru(w, std) => Some(zero_velocity::linearize_zaru(ctx, w, *std)),
+            Aiding::Pseudorange(sat) => pseudorange::linearize(ctx, sat),
+            Aiding::Doppler(sat) => doppler::linearize(ctx, sat),
+            Aiding::Tdcp(sat, prev, iv) => tdcp::linearize(ctx, sat, prev, iv),
         }
     }
 }
@@ -127,6 +152,8 @@ pub(crate) mod tests {
         if vehicle_states {
             layout.push(Block::OdometerScale);
             layout.push(Block::Mounting);
+            layout.push(Block::ClockBias);
+            layout.push(Block::ClockDrift);
         }
         Fixture {
             nav: NavState {
@@ -149,7 +176,7 @@ pub(crate) mod tests {
         f: &'a Fixture,
         nav: &'a NavState,
         w: Vector3<f64>,
-        v: VehicleEstimate,
+        v: (VehicleEstimate, ReceiverClock),
     ) -> AidingContext<'a> {
         AidingContext {
             nav,
@@ -157,13 +184,22 @@ pub(crate) mod tests {
             w_ib_b: w,
             a_n: Vector3::zeros(),
             lever_arm_b: Vector3::new(0.5, 0.1, -1.0),
-            vehicle: v,
+            vehicle: v.0,
+            clock: v.1,
         }
     }
 
+    const FIXTURE_CLOCK: ReceiverClock = ReceiverClock {
+        bias_m: 1234.5,
+        drift_mps: -3.2,
+    };
+
     /// Apply an error dx to the true state (state.rs conventions; the IMU error states
     /// are true - estimate, so the compensated rate is w + db_g + diag(w) ds_g).
-    fn inject(f: &Fixture, dx: &DVector<f64>) -> (NavState, Vector3<f64>, VehicleEstimate) {
+    fn inject(
+        f: &Fixture,
+        dx: &DVector<f64>,
+    ) -> (NavState, Vector3<f64>, (VehicleEstimate, ReceiverClock)) {
         let v3 = |i: usize| Vector3::new(dx[i], dx[i + 1], dx[i + 2]);
         let mut nav = f.nav;
         nav.lla = lla_add_ned(&f.nav.lla, &v3(POS));
@@ -178,7 +214,14 @@ pub(crate) mod tests {
             let da = Vector3::new(0.0, dx[i], dx[i + 1]);
             veh.c_bm = quat_from_rotvec(&(-da)).to_rotation_matrix().into_inner() * veh.c_bm;
         }
-        (nav, w, veh)
+        let mut clock = FIXTURE_CLOCK;
+        if let Some(i) = f.layout.index(Block::ClockBias) {
+            clock.bias_m += dx[i];
+        }
+        if let Some(i) = f.layout.index(Block::ClockDrift) {
+            clock.drift_mps += dx[i];
+        }
+        (nav, w, (veh, clock))
     }
 
     /// Check column by column that `model`'s Jacobian matches finite differences.
@@ -187,7 +230,7 @@ pub(crate) mod tests {
         model: impl Fn(&AidingContext) -> (Vector3<f64>, DMatrix<f64>),
         eps: f64,
     ) {
-        let (h0, jac) = model(&ctx(f, &f.nav, f.w_ib_b, f.vehicle));
+        let (h0, jac) = model(&ctx(f, &f.nav, f.w_ib_b, (f.vehicle, FIXTURE_CLOCK)));
         let n = f.layout.len();
         for j in 0..n {
             let mut dx = DVector::zeros(n);
@@ -209,12 +252,11 @@ pub(crate) mod tests {
 
     /// Linearized models checked the same way; `make` builds the measurement from the
     /// (perturbed) compensated rate, for ZARU whose input is that rate.
-    fn check_linearized<'a>(f: &Fixture, make: impl Fn(Vector3<f64>) -> Aiding<'a>) {
-        let c0 = ctx(f, &f.nav, f.w_ib_b, f.vehicle);
+    fn check_linearized<'a>(f: &Fixture, eps: f64, make: impl Fn(Vector3<f64>) -> Aiding<'a>) {
+        let c0 = ctx(f, &f.nav, f.w_ib_b, (f.vehicle, FIXTURE_CLOCK));
         let aiding = make(f.w_ib_b);
         let l0 = aiding.linearize(&c0).unwrap();
         let n = f.layout.len();
-        let eps = 1e-6;
         for j in 0..n {
             let mut dx = DVector::zeros(n);
             dx[j] = eps;
@@ -248,6 +290,7 @@ pub(crate) mod tests {
             heading_rad: 2.0,
             std_rad: 0.01,
         };
+        let sat = fixture_satellite(&f);
         for a in [
             Aiding::GnssPosition(&fix),
             Aiding::GnssVelocity(&fix),
@@ -261,8 +304,87 @@ pub(crate) mod tests {
             },
             Aiding::Zupt(0.01),
         ] {
-            check_linearized(&f, |_| a);
+            check_linearized(&f, 1e-6, |_| a);
         }
-        check_linearized(&f, |w| Aiding::Zaru(w, 1e-4));
+        check_linearized(&f, 1e-6, |w| Aiding::Zaru(w, 1e-4));
+        // Ranges of 2e7 m: a larger step keeps the rounding below the tolerance.
+        for a in [Aiding::Pseudorange(&sat), Aiding::Doppler(&sat)] {
+            check_linearized(&f, 1e-4, |_| a);
+        }
+    }
+
+    /// A satellite 20,000 km up, north-east of the fixture, moving at 3 km/s.
+    pub fn fixture_satellite(f: &Fixture) -> SatMeasurement {
+        let r = crate::earth::lla_to_ecef(&f.nav.lla);
+        let c = crate::earth::c_ne(f.nav.lla.x, f.nav.lla.y);
+        let pos = r + c * Vector3::new(9e6, 7e6, -1.6e7);
+        SatMeasurement {
+            prn: 7,
+            sat_pos_ecef_m: pos,
+            sat_vel_ecef_mps: c * Vector3::new(-1500.0, 2500.0, 600.0),
+            elevation_rad: 0.9,
+            pseudorange_m: Some((pos - r).norm() + 1000.0),
+            pseudorange_std_m: 3.0,
+            range_rate_mps: Some(-400.0),
+            range_rate_std_mps: 0.1,
+            carrier_m: Some(123.0),
+            carrier_std_m: 0.003,
+            lost_lock: false,
+            dgps: false,
+        }
+    }
+
+    /// TDCP: the position columns are the exact derivative of the model (the previous
+    /// antenna position is the current one minus a fixed displacement); the velocity
+    /// column is -u_{k-1} through the antenna velocity Jacobian (d D = d v dt), checked
+    /// against the Doppler row, whose line of sight is nearly the same.
+    #[test]
+    fn tdcp_jacobian() {
+        let f = context_fixture(true);
+        let sat = fixture_satellite(&f);
+        let prev = tdcp::TdcpPrevious {
+            t: -1.0,
+            sat_pos_ecef_m: sat.sat_pos_ecef_m - sat.sat_vel_ecef_mps,
+            carrier_m: 100.0,
+            carrier_std_m: 0.003,
+        };
+        let iv = tdcp::Interval {
+            antenna_displacement_ecef_m: crate::earth::c_ne(f.nav.lla.x, f.nav.lla.y) * f.nav.v_n,
+            dt_s: 1.0,
+        };
+        let a = Aiding::Tdcp(&sat, prev, iv);
+        let c0 = ctx(&f, &f.nav, f.w_ib_b, (f.vehicle, FIXTURE_CLOCK));
+        let l0 = a.linearize(&c0).unwrap();
+        let dop = Aiding::Doppler(&sat).linearize(&c0).unwrap();
+        let eps = 1.0;
+        let n = f.layout.len();
+        for j in 0..n {
+            let is_pos = (POS..POS + 3).contains(&j);
+            let is_clock = f.layout.index(Block::ClockDrift) == Some(j);
+            if is_pos || is_clock || (ATT..ATT + 3).contains(&j) {
+                let mut dx = DVector::zeros(n);
+                dx[j] = eps;
+                let (nav, w, veh) = inject(&f, &dx);
+                let l1 = a.linearize(&ctx(&f, &nav, w, veh)).unwrap();
+                let num = (l1.y[0] - l0.y[0]) / eps;
+                // The attitude enters through the lever arm of both epochs' positions
+                // (cancels) and through the antenna velocity (not in this model).
+                if !(ATT..ATT + 3).contains(&j) {
+                    let h = l0.h[(0, j)];
+                    assert!(
+                        (num - h).abs() < 1e-4 * (1e-3 + h.abs()),
+                        "col {j}: {num} vs {h}"
+                    );
+                }
+            }
+        }
+        for k in 0..3 {
+            let (a, b) = (l0.h[(0, VEL + k)], dop.h[(0, VEL + k)]);
+            assert!(
+                (a - b).abs() < 1e-3 * (1.0 + b.abs()),
+                "vel {k}: {a} vs {b}"
+            );
+        }
+        assert!((l0.r[(0, 0)] - 2.0 * 0.003f64.powi(2)).abs() < 1e-12);
     }
 }

@@ -1,0 +1,791 @@
+//! Per-epoch measurement preparation for tight GNSS/INS coupling (SYSTEM.md §3b,
+//! seed 000 eq. 12-18): turns one RINEX observation epoch into a
+//! [`navfuse_core::GnssRawEpoch`], with everything the GNSS layer can model removed
+//! (IS-GPS-200 20.3.3.3.3.1-2 satellite clock with relativity and TGD, and either the
+//! DGPS correction or the Klobuchar and Saastamoinen models). See docs/GNSS.md,
+//! "Tight-coupling measurements and DGPS".
+//!
+//! Conventions (P pseudorange, L carrier [cycles], D Doppler [Hz]):
+//! `P = rho + c dt_r - c (dt_sv - TGD) + I + T`, `lambda L = rho + c dt_r - c dt_sv - I +
+//! T + lambda N`. Prepared: `pseudorange_m = P + c (dt_sv - TGD) - I - T` (or `+ prc +
+//! rrc (t - t_s)` with DGPS), `carrier_m = lambda L + c (dt_sv - TGD) [+ integrated
+//! rrc]`, `range_rate_mps = -lambda D + c d(dt_sv)/dt [+ rrc]`.
+
+use crate::dgps::{DgpsCorrection, DgpsCorrections};
+use crate::ephemeris::SPEED_OF_LIGHT_MPS;
+use crate::ephemeris_set::EphemerisSet;
+use crate::geometry::{az_el, signal_path};
+use crate::obs::{ObsEpoch, SatObs};
+use crate::spp::{
+    solve_epoch, SppConfig, SppError, SppErrorModel, SppMeasurement, SppSolution,
+    GPS_L1_WAVELENGTH_M,
+};
+use crate::time::{GpsTime, SECONDS_PER_WEEK};
+use nalgebra::Vector3;
+use navfuse_core::earth::{c_ne, ecef_to_lla};
+use navfuse_core::{GnssFix, GnssRawEpoch, SatMeasurement};
+
+/// A DGPS correction time-tagged up to this much after the measurement is taken as
+/// the same epoch's (receiver clocks are steered within 1 ms of GPS time) [s].
+const DGPS_SAME_EPOCH_S: f64 = 1e-3;
+
+/// Settings of the preparation.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TightPrepConfig {
+    /// Elevation mask, ionosphere model, troposphere model, error model (incl.
+    /// `dgps_sigma_m`) and FDE, for both the SPP and the prepared measurements.
+    pub spp: SppConfig,
+    /// Oldest DGPS correction used [s] (default 30).
+    pub dgps_max_age_s: f64,
+    /// Carrier phase 1-sigma at zenith [m] (default 0.003), elevation weighted like the
+    /// code: times sqrt(var_el(el) / var_el(90 deg)).
+    pub carrier_sigma_m: f64,
+    /// Range-rate (Doppler) 1-sigma at zenith [m/s], elevation weighted the same way
+    /// (default the SPP Doppler sigma 1 Hz x lambda_L1 = 0.19 m/s).
+    pub doppler_sigma_mps: f64,
+}
+
+impl Default for TightPrepConfig {
+    fn default() -> Self {
+        TightPrepConfig {
+            spp: SppConfig::default(),
+            dgps_max_age_s: 30.0,
+            carrier_sigma_m: 0.003,
+            doppler_sigma_mps: SppErrorModel::default().doppler_sigma_hz * GPS_L1_WAVELENGTH_M,
+        }
+    }
+}
+
+/// One prepared epoch.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PreparedEpoch {
+    /// The measurements; `sats` is empty while no receiver position is known yet.
+    pub raw: GnssRawEpoch,
+    /// This epoch's SPP (with the DGPS corrections it had).
+    pub spp: Result<SppSolution, SppError>,
+    /// Prepared satellites with a pseudorange that got a DGPS correction.
+    pub dgps_applied: usize,
+    /// Prepared satellites with a pseudorange that had none (DGPS configured only).
+    pub dgps_missing: usize,
+}
+
+/// Per-PRN state carried from the previous epoch.
+#[derive(Clone, Copy, Debug)]
+struct PrnState {
+    /// Index of the epoch it belongs to.
+    epoch: u64,
+    /// Time of validity [s of the run's week].
+    t_s: f64,
+    has_carrier: bool,
+    /// DGPS range-rate correction applied [m/s].
+    rrc_mps: Option<f64>,
+    /// Integrated rrc added to the carrier [m].
+    acc_m: f64,
+}
+
+/// Receiver position, velocity and clock at a receiver time tag.
+#[derive(Clone, Copy, Debug)]
+struct RxEstimate {
+    /// Receiver time tag [s of the run's week].
+    t_tag_s: f64,
+    pos_ecef_m: Vector3<f64>,
+    vel_ecef_mps: Option<Vector3<f64>>,
+    clock_m: f64,
+    drift_mps: Option<f64>,
+}
+
+impl RxEstimate {
+    /// Propagated to another tag with the velocity and drift, when known.
+    fn predict(&self, t_tag_s: f64) -> RxEstimate {
+        let dt = t_tag_s - self.t_tag_s;
+        RxEstimate {
+            t_tag_s,
+            pos_ecef_m: self.pos_ecef_m + self.vel_ecef_mps.unwrap_or_default() * dt,
+            clock_m: self.clock_m + self.drift_mps.unwrap_or(0.0) * dt,
+            ..*self
+        }
+    }
+}
+
+/// Prepares successive receiver epochs; keeps the last receiver estimate and the
+/// per-PRN carrier continuity and DGPS state.
+#[derive(Clone, Debug)]
+pub struct EpochPreparer {
+    ephs: EphemerisSet,
+    cfg: TightPrepConfig,
+    dgps: Option<DgpsCorrections>,
+    /// Index = PRN.
+    prns: Vec<Option<PrnState>>,
+    last: Option<RxEstimate>,
+    epoch: u64,
+}
+
+impl EpochPreparer {
+    pub fn new(ephs: EphemerisSet, cfg: TightPrepConfig, dgps: Option<DgpsCorrections>) -> Self {
+        EpochPreparer {
+            ephs,
+            cfg,
+            dgps,
+            prns: vec![None; 256],
+            last: None,
+            epoch: 0,
+        }
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &TightPrepConfig {
+        &self.cfg
+    }
+
+    /// Prepare one epoch (call in time order). `week` = the run's reference GPS week:
+    /// `GnssRawEpoch.t` and `fix.t` are seconds of that week (may exceed 604800 across
+    /// a rollover). They are times of validity: the receiver tag minus the estimated
+    /// receiver clock.
+    pub fn prepare(&mut self, epoch: &ObsEpoch, week: i32) -> PreparedEpoch {
+        let c = SPEED_OF_LIGHT_MPS;
+        self.epoch += 1;
+        let t_tag_s = f64::from(epoch.t.week - week) * SECONDS_PER_WEEK + epoch.t.sow;
+        let predicted = self.last.map(|l| l.predict(t_tag_s));
+
+        // DGPS corrections of this epoch: tags and correction times lie on the same
+        // GPS-time grid up to the receiver clocks (kept within 1 ms), so a correction
+        // up to 1 ms after the later of tag and true time belongs to this epoch.
+        let t_est_s = t_tag_s - predicted.map_or(0.0, |p| p.clock_m) / c;
+        let t_query_s = t_tag_s.max(t_est_s) + DGPS_SAME_EPOCH_S;
+        let corrs: Vec<Option<DgpsCorrection>> = epoch
+            .sats
+            .iter()
+            .map(|s| self.dgps_for(s.prn, epoch.t, t_query_s))
+            .collect();
+
+        // For the SPP, the model difference to the station at the predicted position
+        // (none before the first: the rover is taken at the station).
+        let approx_pos = predicted.map(|p| p.pos_ecef_m);
+        let meas: Vec<SppMeasurement> = epoch
+            .sats
+            .iter()
+            .zip(&corrs)
+            .filter_map(|(s, corr)| {
+                let dgps_prc_m = corr.map(|k| {
+                    let diff = match (approx_pos, self.ephs.select(s.prn, epoch.t)) {
+                        (Some(p), Some(eph)) => {
+                            let sat = eph.sat_state(epoch.t).pos_ecef_m;
+                            self.model_difference_m(&sat, &p, epoch.t.sow)
+                        }
+                        _ => 0.0,
+                    };
+                    k.at_m(t_est_s) - diff
+                });
+                Some(SppMeasurement {
+                    prn: s.prn,
+                    pseudorange_m: s.pseudorange_m?,
+                    doppler_hz: s.doppler_hz,
+                    dgps_prc_m,
+                })
+            })
+            .collect();
+        let start = predicted.map(|p| (p.pos_ecef_m, p.clock_m));
+        let spp = solve_epoch(&self.ephs, epoch.t, &meas, &self.cfg.spp, start);
+        // A failed residual test still locates the receiver well enough for the
+        // geometry (100 m moves a satellite by ~1 mm): refit without FDE, no fix.
+        let geometry = match &spp {
+            Err(SppError::ResidualTestFailed { .. }) => {
+                let cfg = SppConfig {
+                    fde: false,
+                    ..self.cfg.spp.clone()
+                };
+                solve_epoch(&self.ephs, epoch.t, &meas, &cfg, start).ok()
+            }
+            r => r.as_ref().ok().cloned(),
+        };
+
+        let rx = match geometry {
+            Some(s) => {
+                let est = RxEstimate {
+                    t_tag_s,
+                    pos_ecef_m: s.pos_ecef_m,
+                    vel_ecef_mps: s.vel_ecef_mps,
+                    clock_m: s.clock_bias_m,
+                    drift_mps: s.clock_drift_mps,
+                };
+                self.last = Some(est);
+                Some(est)
+            }
+            None => predicted,
+        };
+        let Some(rx) = rx else {
+            return PreparedEpoch {
+                raw: GnssRawEpoch {
+                    t: t_tag_s,
+                    sats: Vec::new(),
+                    fix: None,
+                },
+                spp,
+                dgps_applied: 0,
+                dgps_missing: 0,
+            };
+        };
+
+        let t_s = t_tag_s - rx.clock_m / c;
+        let fix = spp.as_ref().ok().map(|s| fix_from_spp(s, t_s));
+        let mut sats: Vec<SatMeasurement> = Vec::with_capacity(epoch.sats.len());
+        let (mut dgps_applied, mut dgps_missing) = (0, 0);
+        for (s, corr) in epoch.sats.iter().zip(&corrs) {
+            if sats.iter().any(|m| m.prn == s.prn) {
+                continue;
+            }
+            let Some(m) = self.prepare_sat(epoch, s, *corr, &rx, t_s) else {
+                continue;
+            };
+            if m.pseudorange_m.is_some() {
+                if m.dgps {
+                    dgps_applied += 1;
+                } else if self.dgps.is_some() {
+                    dgps_missing += 1;
+                }
+            }
+            sats.push(m);
+        }
+        PreparedEpoch {
+            raw: GnssRawEpoch { t: t_s, sats, fix },
+            spp,
+            dgps_applied,
+            dgps_missing,
+        }
+    }
+
+    /// The DGPS correction for `prn` at `t_s` (s of the run's week), with the
+    /// ephemeris' IODE, moved onto the run's time scale; None without DGPS.
+    fn dgps_for(&self, prn: u8, t: GpsTime, t_s: f64) -> Option<DgpsCorrection> {
+        let store = self.dgps.as_ref()?;
+        let eph = self.ephs.select(prn, t)?;
+        // The store's scale may start a week off the run's (rollover between them).
+        let shift = ((store.first_t_s()? - t_s) / SECONDS_PER_WEEK).round() * SECONDS_PER_WEEK;
+        let mut k = *store.lookup(prn, t_s + shift, self.cfg.dgps_max_age_s, Some(eph.iode))?;
+        k.t_s -= shift;
+        Some(k)
+    }
+
+    /// Broadcast model delays (iono + tropo, as configured) at the rover minus at the
+    /// DGPS reference station, for a satellite at `sat_pos_ecef_m` [m]; 0 when the
+    /// station position is unknown.
+    fn model_difference_m(
+        &self,
+        sat_pos_ecef_m: &Vector3<f64>,
+        rx_pos_ecef_m: &Vector3<f64>,
+        sow: f64,
+    ) -> f64 {
+        let Some(ref_pos) = self.dgps.as_ref().and_then(|d| d.reference_pos_ecef_m()) else {
+            return 0.0;
+        };
+        let model = |p: &Vector3<f64>| {
+            let lla = ecef_to_lla(p);
+            let (az, el) = az_el(&lla, &(sat_pos_ecef_m - p).normalize());
+            let (iono_m, tropo_m) = self.cfg.spp.atmosphere_m(&lla, az, el, sow);
+            iono_m + tropo_m
+        };
+        model(rx_pos_ecef_m) - model(&ref_pos)
+    }
+
+    /// One satellite; None without an ephemeris or usable observable, or below the
+    /// mask. Updates the PRN's continuity state.
+    fn prepare_sat(
+        &mut self,
+        epoch: &ObsEpoch,
+        s: &SatObs,
+        corr: Option<DgpsCorrection>,
+        rx: &RxEstimate,
+        t_s: f64,
+    ) -> Option<SatMeasurement> {
+        let c = SPEED_OF_LIGHT_MPS;
+        let lambda = GPS_L1_WAVELENGTH_M;
+        let cfg = &self.cfg.spp;
+        let eph = self.ephs.select(s.prn, epoch.t)?;
+        let pr = s.pseudorange_m.filter(|p| p.is_finite() && *p > 0.0);
+        let doppler = s.doppler_hz.filter(|d| d.is_finite());
+        let cycles = s.carrier_cycles.filter(|l| l.is_finite());
+        if pr.is_none() && doppler.is_none() && cycles.is_none() {
+            return None;
+        }
+        let lla = ecef_to_lla(&rx.pos_ecef_m);
+        let vel = rx.vel_ecef_mps.unwrap_or_default();
+        // Light time at the true reception time (tag - clock), as spp.rs.
+        let t_true = epoch.t.add_s(-rx.clock_m / c);
+        let sp = signal_path(eph, &rx.pos_ecef_m, &vel, t_true);
+        let (az, el) = az_el(&lla, &sp.los_unit);
+        if el.is_nan() || el < cfg.elevation_mask_rad {
+            return None;
+        }
+        // IS-GPS-200 20.3.3.3.3.2: the L1 C/A user's satellite clock is dt_sv - TGD.
+        let sat_clock_m = c * (sp.sat_clock_bias_s - eph.tgd_s);
+        let (iono_m, tropo_m) = match corr {
+            Some(_) => (0.0, 0.0),
+            None => cfg.atmosphere_m(&lla, az, el, epoch.t.sow),
+        };
+        let pseudorange_m = pr.map(|p| {
+            p + sat_clock_m
+                + match corr {
+                    Some(k) => {
+                        k.at_m(t_s)
+                            - self.model_difference_m(
+                                &sp.sat_pos_ecef_m,
+                                &rx.pos_ecef_m,
+                                epoch.t.sow,
+                            )
+                    }
+                    None => -iono_m - tropo_m,
+                }
+        });
+        let pr_var = cfg.pseudorange_variance_m2(eph, el, iono_m, corr.is_some());
+        let em = &cfg.errors;
+        let el_scale = (em.elevation_variance_m2(el)
+            / em.elevation_variance_m2(std::f64::consts::FRAC_PI_2))
+        .sqrt();
+        let rrc_mps = corr.map(|k| k.rrc_mps);
+        let range_rate_mps =
+            doppler.map(|d| -lambda * d + c * sp.sat_clock_drift_s_per_s + rrc_mps.unwrap_or(0.0));
+
+        // Carrier continuity: lock kept (LLI bit 0, RINEX 3.04 §5.3), epoch flag 0
+        // (1 = power failure), and this PRN prepared with a carrier at the previous epoch.
+        let slot = self.prns.get_mut(usize::from(s.prn))?;
+        let prev = slot.filter(|p| p.epoch + 1 == self.epoch && p.has_carrier);
+        let lost_lock = epoch.flag != 0 || s.lli & 1 != 0 || prev.is_none();
+        // Integrated rrc (trapezoid); restarts with each carrier arc.
+        let acc_m = match prev {
+            Some(p) if !lost_lock => {
+                let mean_rrc = 0.5 * (p.rrc_mps.unwrap_or(0.0) + rrc_mps.unwrap_or(0.0));
+                p.acc_m + mean_rrc * (t_s - p.t_s)
+            }
+            _ => 0.0,
+        };
+        *slot = Some(PrnState {
+            epoch: self.epoch,
+            t_s,
+            has_carrier: cycles.is_some(),
+            rrc_mps,
+            acc_m,
+        });
+        Some(SatMeasurement {
+            prn: s.prn,
+            sat_pos_ecef_m: sp.sat_pos_ecef_m,
+            sat_vel_ecef_mps: sp.sat_vel_ecef_mps,
+            elevation_rad: el,
+            pseudorange_m,
+            pseudorange_std_m: pr_var.sqrt(),
+            range_rate_mps,
+            range_rate_std_mps: self.cfg.doppler_sigma_mps * el_scale,
+            carrier_m: cycles.map(|l| lambda * l + sat_clock_m + acc_m),
+            carrier_std_m: self.cfg.carrier_sigma_m * el_scale,
+            lost_lock,
+            dgps: corr.is_some() && pseudorange_m.is_some(),
+        })
+    }
+}
+
+/// The loosely coupled fix of an SPP solution, at time of validity `t_s`.
+fn fix_from_spp(s: &SppSolution, t_s: f64) -> GnssFix {
+    let c_en = c_ne(s.lla.x, s.lla.y).transpose();
+    GnssFix {
+        t: t_s,
+        lla: s.lla,
+        std_ned: s.std_ned_m.map(|x| x.max(1e-3)),
+        vel_ned: s.vel_ecef_mps.map(|v| c_en * v),
+        vel_std_ned: s.vel_std_ned_mps.map(|v| v.map(|x| x.max(1e-4))),
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use crate::atmosphere::{klobuchar_l1_delay_m, saastamoinen_slant_m};
+    use crate::constellation::nominal_gps24;
+    use crate::spp::IonoModel;
+    use navfuse_core::earth::lla_to_ecef;
+
+    pub(crate) const ALPHA: [f64; 4] = [1.1176e-8, 1.4901e-8, -5.9605e-8, -1.1921e-7];
+    pub(crate) const BETA: [f64; 4] = [1.1469e5, 8.1920e4, -1.3107e5, -5.2429e5];
+    const C: f64 = SPEED_OF_LIGHT_MPS;
+
+    pub(crate) fn toe() -> GpsTime {
+        GpsTime::new(2381, 410_400.0)
+    }
+
+    /// The nominal constellation with non-zero clocks, TGDs, eccentricities, IODEs.
+    pub(crate) fn ephemerides() -> EphemerisSet {
+        let mut ephs = nominal_gps24(toe());
+        for (k, e) in ephs.iter_mut().enumerate() {
+            let k = k as f64;
+            e.af0_s = (k - 11.5) * 3e-5;
+            e.af1_s_per_s = (k - 7.0) * 1e-12;
+            e.tgd_s = (k - 12.0) * 1e-9;
+            e.e = 0.002 + 0.0005 * k;
+            e.iode = 40 + k as u16;
+        }
+        EphemerisSet::new(ephs)
+    }
+
+    /// A receiver moving at constant velocity with a linear clock; `jump` adds a
+    /// clock step [m] from `jump_at_s` (seconds after the start) on.
+    #[derive(Clone, Copy)]
+    pub(crate) struct Receiver {
+        pub pos0_ecef_m: Vector3<f64>,
+        pub vel_ecef_mps: Vector3<f64>,
+        pub clock0_m: f64,
+        pub drift_mps: f64,
+        pub jump: Option<(f64, f64)>,
+    }
+
+    impl Receiver {
+        /// Near Boulder, moving, u-blox-like clock (-1.5 ms, drifting).
+        pub(crate) fn rover() -> Self {
+            let lla = Vector3::new(40.0967f64.to_radians(), (-105.1472f64).to_radians(), 1601.4);
+            Receiver {
+                pos0_ecef_m: lla_to_ecef(&lla),
+                vel_ecef_mps: c_ne(lla.x, lla.y) * Vector3::new(12.0, -7.0, 0.1),
+                clock0_m: -1.5e-3 * C,
+                drift_mps: -60.0,
+                jump: None,
+            }
+        }
+        pub(crate) fn pos(&self, dt_s: f64) -> Vector3<f64> {
+            self.pos0_ecef_m + self.vel_ecef_mps * dt_s
+        }
+        /// Position at the true time of the tag `t0 + dt_s`.
+        pub(crate) fn pos_at_tag(&self, dt_s: f64) -> Vector3<f64> {
+            self.pos(dt_s - self.clock(dt_s) / C)
+        }
+        /// Clock [m] at the tag `t0 + dt_s`.
+        pub(crate) fn clock(&self, dt_s: f64) -> f64 {
+            let step = match self.jump {
+                Some((at, m)) if dt_s >= at => m,
+                _ => 0.0,
+            };
+            self.clock0_m + self.drift_mps * dt_s + step
+        }
+    }
+
+    /// Exact observations of every satellite above 5 deg at tag `t0 + dt_s` (the
+    /// receiver clock defined on the tag scale, the rest at the true time).
+    /// `extra(prn, dt_s)` = (error added to code and carrier [m], its rate [m/s]) at
+    /// true time `t0 + dt_s`;
+    /// `atmosphere` adds the Klobuchar and Saastamoinen delays. Ambiguity 1000 prn.
+    pub(crate) fn observe(
+        ephs: &EphemerisSet,
+        t0: GpsTime,
+        dt_s: f64,
+        rx: &Receiver,
+        atmosphere: bool,
+        extra: &dyn Fn(u8, f64) -> (f64, f64),
+    ) -> ObsEpoch {
+        let t_tag = t0.add_s(dt_s);
+        let clock = rx.clock(dt_s);
+        let t_true = t_tag.add_s(-clock / C);
+        let pos = rx.pos_at_tag(dt_s);
+        let lla = ecef_to_lla(&pos);
+        let mut sats = Vec::new();
+        for prn in ephs.prns() {
+            let eph = ephs.select(prn, t_tag).unwrap();
+            let sp = signal_path(eph, &pos, &rx.vel_ecef_mps, t_true);
+            let (az, el) = az_el(&lla, &sp.los_unit);
+            if el < 5f64.to_radians() {
+                continue;
+            }
+            let (iono, tropo) = if atmosphere {
+                (
+                    klobuchar_l1_delay_m(&ALPHA, &BETA, lla.x, lla.y, az, el, t_tag.sow),
+                    saastamoinen_slant_m(lla.x, lla.z, el),
+                )
+            } else {
+                (0.0, 0.0)
+            };
+            let (e, e_rate) = extra(prn, dt_s - clock / C);
+            let geo = sp.geometric_range_m + clock - C * (sp.sat_clock_bias_s - eph.tgd_s) + e;
+            let rr = sp.range_rate_mps + rx.drift_mps - C * sp.sat_clock_drift_s_per_s + e_rate;
+            sats.push(SatObs {
+                prn,
+                pseudorange_m: Some(geo + iono + tropo),
+                carrier_cycles: Some(
+                    (geo - iono + tropo) / GPS_L1_WAVELENGTH_M + 1000.0 * f64::from(prn),
+                ),
+                doppler_hz: Some(-rr / GPS_L1_WAVELENGTH_M),
+                cn0_dbhz: Some(45.0),
+                lli: 0,
+            });
+        }
+        ObsEpoch {
+            t: t_tag,
+            flag: 0,
+            rx_clock_offset_s: None,
+            sats,
+        }
+    }
+
+    pub(crate) fn no_extra(_: u8, _: f64) -> (f64, f64) {
+        (0.0, 0.0)
+    }
+
+    pub(crate) fn config(models: bool) -> TightPrepConfig {
+        let mut cfg = TightPrepConfig::default();
+        if models {
+            cfg.spp.iono = IonoModel::Klobuchar {
+                alpha: ALPHA,
+                beta: BETA,
+            };
+        } else {
+            cfg.spp.tropo_saastamoinen = false;
+        }
+        cfg
+    }
+
+    /// Start of the test runs: 8 satellites above 10 deg.
+    pub(crate) fn t0() -> GpsTime {
+        toe().add_s(500.0)
+    }
+
+    /// (prn, pseudorange - range - clock, range rate - geometric rate - drift,
+    /// carrier - range - clock (NaN without carrier)).
+    pub(crate) type Residual = (u8, f64, f64, f64);
+
+    /// Residuals of the prepared measurements against the truth at tag `t0 + dt_s`.
+    pub(crate) fn residuals(p: &PreparedEpoch, rx: &Receiver, dt_s: f64) -> Vec<Residual> {
+        let pos = rx.pos_at_tag(dt_s);
+        p.raw
+            .sats
+            .iter()
+            .map(|m| {
+                let d = m.sat_pos_ecef_m - pos;
+                let los = d / d.norm();
+                let rate = los.dot(&(m.sat_vel_ecef_mps - rx.vel_ecef_mps));
+                (
+                    m.prn,
+                    m.pseudorange_m.unwrap() - d.norm() - rx.clock(dt_s),
+                    m.range_rate_mps.unwrap() - rate - rx.drift_mps,
+                    m.carrier_m
+                        .map_or(f64::NAN, |l| l - d.norm() - rx.clock(dt_s)),
+                )
+            })
+            .collect()
+    }
+
+    #[test]
+    fn satellite_clock_and_models_are_removed() {
+        let ephs = ephemerides();
+        let rx = Receiver::rover();
+        let ep = observe(&ephs, t0(), 0.0, &rx, true, &no_extra);
+        let mut prep = EpochPreparer::new(ephs, config(true), None);
+        let p = prep.prepare(&ep, 2381);
+        let spp = p.spp.as_ref().unwrap();
+        assert!(p.raw.sats.len() >= 6, "{}", p.raw.sats.len());
+        // Satellites between 5 and 10 deg are dropped, as in the SPP.
+        assert_eq!(p.raw.sats.len(), spp.n_used);
+        assert!(p.raw.sats.len() < ep.sats.len());
+        for (prn, pr, rr, _) in residuals(&p, &rx, 0.0) {
+            assert!(pr.abs() < 1e-3, "G{prn:02} pseudorange residual {pr} m");
+            assert!(rr.abs() < 1e-3, "G{prn:02} range-rate residual {rr} m/s");
+        }
+        for m in &p.raw.sats {
+            assert!(m.elevation_rad >= 10f64.to_radians());
+            assert!(!m.dgps && m.lost_lock);
+            assert!(m.pseudorange_std_m > 1.0 && m.pseudorange_std_m.is_finite());
+            assert!(m.carrier_std_m >= 0.003 && m.carrier_std_m < 0.02);
+            assert!(m.range_rate_std_mps >= 0.19 && m.range_rate_std_mps < 1.5);
+        }
+        assert_eq!((p.dgps_applied, p.dgps_missing), (0, 0));
+        // Time of validity: tag - clock / c; the fix is the SPP's.
+        assert!((p.raw.t - (t0().sow + 1.5e-3)).abs() < 1e-9);
+        let fix = p.raw.fix.unwrap();
+        assert_eq!(fix.t, p.raw.t);
+        assert!((lla_to_ecef(&fix.lla) - rx.pos_at_tag(0.0)).norm() < 1e-3);
+        let lla = ecef_to_lla(&rx.pos_at_tag(0.0));
+        let v_ned = c_ne(lla.x, lla.y).transpose() * rx.vel_ecef_mps;
+        assert!((fix.vel_ned.unwrap() - v_ned).norm() < 1e-3);
+        assert!(fix.std_ned.iter().all(|s| *s > 0.0));
+        // A reference week one earlier: t counts on past 604800.
+        let p = EpochPreparer::new(ephemerides(), config(true), None).prepare(&ep, 2380);
+        assert!((p.raw.t - (604_800.0 + t0().sow + 1.5e-3)).abs() < 1e-9);
+    }
+
+    #[test]
+    fn carrier_continuity_and_lost_lock() {
+        let ephs = ephemerides();
+        let rx = Receiver::rover();
+        let mut prep = EpochPreparer::new(ephs.clone(), config(false), None);
+        let first = observe(&ephs, t0(), 0.0, &rx, false, &no_extra);
+        let prns: Vec<u8> = prep
+            .prepare(&first, 2381)
+            .raw
+            .sats
+            .iter()
+            .map(|m| m.prn)
+            .collect();
+        let (a, b, d) = (prns[0], prns[1], prns[2]);
+        for k in 1..7 {
+            let dt = f64::from(k);
+            let mut ep = observe(&ephs, t0(), dt, &rx, false, &no_extra);
+            match k {
+                2 => ep.sats.iter_mut().find(|s| s.prn == a).unwrap().lli = 1,
+                3 => {
+                    ep.sats.retain(|s| s.prn != b);
+                    ep.sats
+                        .iter_mut()
+                        .find(|s| s.prn == d)
+                        .unwrap()
+                        .carrier_cycles = None;
+                }
+                6 => ep.flag = 1,
+                _ => {}
+            }
+            let p = prep.prepare(&ep, 2381);
+            for m in &p.raw.sats {
+                let expect = match k {
+                    2 => m.prn == a,
+                    4 => m.prn == b || m.prn == d,
+                    6 => true,
+                    _ => false,
+                };
+                assert_eq!(m.lost_lock, expect, "epoch {k} G{:02}", m.prn);
+            }
+            assert_eq!(p.raw.sats.iter().any(|m| m.prn == b), k != 3);
+            for (prn, pr, _, cr) in residuals(&p, &rx, dt) {
+                assert!(pr.abs() < 1e-3, "G{prn:02}: {pr}");
+                if prn != d || k != 3 {
+                    // carrier - range - clock = lambda N, the simulated ambiguity.
+                    let n = 1000.0 * f64::from(prn) * GPS_L1_WAVELENGTH_M;
+                    assert!((cr - n).abs() < 1e-3, "epoch {k} G{prn:02}: {}", cr - n);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn no_position_no_satellites_then_the_last_solution() {
+        let ephs = ephemerides();
+        let rx = Receiver::rover();
+        let mut prep = EpochPreparer::new(ephs.clone(), config(false), None);
+        let mut three = observe(&ephs, t0(), 0.0, &rx, false, &no_extra);
+        three.sats.truncate(3);
+        let p = prep.prepare(&three, 2381);
+        assert!(p.spp.is_err() && p.raw.sats.is_empty() && p.raw.fix.is_none());
+        assert_eq!(p.raw.t, t0().sow);
+        let good = observe(&ephs, t0(), 1.0, &rx, false, &no_extra);
+        assert!(prep.prepare(&good, 2381).spp.is_ok());
+        // Three satellites: no SPP, but the last solution (moved on with its velocity
+        // and clock drift) places them; the range rate still fits.
+        let mut three = observe(&ephs, t0(), 2.0, &rx, false, &no_extra);
+        three.sats.truncate(3);
+        let p = prep.prepare(&three, 2381);
+        assert!(p.spp.is_err() && p.raw.fix.is_none());
+        assert!(!p.raw.sats.is_empty() && p.raw.sats.len() <= 3);
+        for (prn, pr, rr, _) in residuals(&p, &rx, 2.0) {
+            assert!(pr.abs() < 1e-3 && rr.abs() < 1e-3, "G{prn:02}: {pr} {rr}");
+        }
+    }
+
+    #[test]
+    fn dgps_corrections_replace_the_models() {
+        let ephs = ephemerides();
+        let rx = Receiver::rover();
+        // Errors common to the rover and the reference station: a bias and a drift
+        // per satellite, and +7 m on one satellite.
+        let faulty = EpochPreparer::new(ephs.clone(), config(true), None)
+            .prepare(&observe(&ephs, t0(), 0.0, &rx, false, &no_extra), 2381)
+            .raw
+            .sats[2]
+            .prn;
+        let extra = move |prn: u8, dt: f64| {
+            let p = f64::from(prn);
+            let rate = 0.05 * (p - 12.0);
+            let bias = 3.0 * (p * 1.7).sin() + if prn == faulty { 7.0 } else { 0.0 };
+            (bias + rate * dt, rate)
+        };
+        // Reference station 10 km away, static, with its own clock that jumps 1 ms.
+        let ref_pos = rx.pos0_ecef_m + Vector3::new(6e3, -6e3, 5e3);
+        let station = Receiver {
+            pos0_ecef_m: ref_pos,
+            vel_ecef_mps: Vector3::zeros(),
+            clock0_m: 0.8e-3 * C,
+            drift_mps: 30.0,
+            jump: Some((12.0, -1e-3 * C)),
+        };
+        let ref_epochs: Vec<ObsEpoch> = (0..40)
+            .map(|k| observe(&ephs, t0(), f64::from(k), &station, false, &extra))
+            .collect();
+        let corr = crate::dgps::corrections_from_reference_station(
+            &ephs,
+            &ref_epochs,
+            ref_pos,
+            5f64.to_radians(),
+        );
+        assert!(corr.len() > 300, "{}", corr.len());
+        let store = DgpsCorrections::new(corr);
+        // The models are configured: a corrected satellite must not get them.
+        let mut prep = EpochPreparer::new(ephs.clone(), config(true), Some(store.clone()));
+        let mut plain = EpochPreparer::new(ephs.clone(), config(true), None);
+        let mut plain_ok = EpochPreparer::new(ephs.clone(), config(true), None);
+        let mut first: Vec<(u8, f64)> = Vec::new();
+        for k in 0..40 {
+            let dt = f64::from(k);
+            let ep = observe(&ephs, t0(), dt, &rx, false, &extra);
+            let p = prep.prepare(&ep, 2381);
+            assert_eq!(p.dgps_applied, p.raw.sats.len());
+            assert_eq!(p.dgps_missing, 0);
+            assert!(p.spp.is_ok());
+            let res = residuals(&p, &rx, dt);
+            // What is left is common to all satellites (the reference clock
+            // residual), to the noise-free data's precision.
+            let spread = |f: &dyn Fn(&Residual) -> f64| {
+                let v: Vec<f64> = res.iter().map(f).collect();
+                v.iter().cloned().fold(f64::MIN, f64::max)
+                    - v.iter().cloned().fold(f64::MAX, f64::min)
+            };
+            assert!(
+                spread(&|r| r.1) < 2e-3,
+                "epoch {k}: pseudorange spread {}",
+                spread(&|r| r.1)
+            );
+            assert!(
+                spread(&|r| r.2) < 1e-3,
+                "epoch {k}: range-rate spread {}",
+                spread(&|r| r.2)
+            );
+            if k == 0 {
+                first = res.iter().map(|r| (r.0, r.3)).collect();
+            } else {
+                // Carrier + integrated rrc: the satellite errors' changes cancel.
+                let dc = |r: &Residual| {
+                    r.3 - first.iter().find(|f| f.0 == r.0).map_or(f64::NAN, |f| f.1)
+                };
+                assert!(
+                    spread(&dc) < 2e-3,
+                    "epoch {k}: carrier spread {}",
+                    spread(&dc)
+                );
+            }
+            for m in &p.raw.sats {
+                assert!(m.dgps);
+                let em = &prep.config().spp.errors;
+                let var = em.elevation_variance_m2(m.elevation_rad) + 1.0;
+                assert!((m.pseudorange_std_m - var.sqrt()).abs() < 1e-12);
+            }
+            // Without DGPS the +7 m stays in the faulty satellite's pseudorange.
+            let with = residuals(&plain.prepare(&ep, 2381), &rx, dt);
+            let ep = observe(&ephs, t0(), dt, &rx, false, &|prn, dt| {
+                let (e, r) = extra(prn, dt);
+                (e - if prn == faulty { 7.0 } else { 0.0 }, r)
+            });
+            let without = residuals(&plain_ok.prepare(&ep, 2381), &rx, dt);
+            for (a, b) in with.iter().zip(&without) {
+                let fault = if a.0 == faulty { 7.0 } else { 0.0 };
+                // (the models move a little with the SPP position)
+                let d = a.1 - b.1 - fault;
+                assert!(d.abs() < 0.1, "G{:02}: {d}", a.0);
+            }
+        }
+        // Corrections older than the age limit are not used: fall back to the models.
+        let late = observe(&ephs, t0(), 39.0 + 31.0, &rx, false, &extra);
+        let p = prep.prepare(&late, 2381);
+        assert_eq!(p.dgps_applied, 0);
+        assert_eq!(p.dgps_missing, p.raw.sats.len());
+        assert!(p.raw.sats.iter().all(|m| !m.dgps));
+    }
+}
