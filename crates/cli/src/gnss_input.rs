@@ -58,21 +58,31 @@ pub fn load_rinex(src: &GnssSource, r: &RinexGnss) -> Result<RinexInput> {
     let cfg = prep_config(r, iono);
     let dgps = match r.dgps.as_ref().map(|d| &d.kind) {
         None => None,
-        Some(DgpsKind::Corrections(p)) => Some(DgpsCorrections::new(
-            navfuse_io::dgps::read_dgps_corrections(p).map_err(err)?,
-        )),
+        Some(DgpsKind::Corrections(p)) => {
+            // With the station position (the file's `#` line), the corrections also
+            // carry the model difference between rover and station heights.
+            let f = navfuse_io::dgps::read_dgps_file(p).map_err(err)?;
+            let c = DgpsCorrections::new(f.corrections);
+            Some(match f.reference_lla {
+                Some(lla) => c.with_reference_position(lla_to_ecef(&lla)),
+                None => c,
+            })
+        }
         Some(DgpsKind::ReferenceStation {
             obs_path,
             position_lla,
         }) => {
             let base: Vec<ObsEpoch> = read_rinex_obs(obs_path).map_err(err)?;
             let ref_ecef = lla_to_ecef(&Vector3::from(*position_lla));
-            Some(DgpsCorrections::new(corrections_from_reference_station(
-                &ephs,
-                &base,
-                ref_ecef,
-                cfg.spp.elevation_mask_rad,
-            )))
+            Some(
+                DgpsCorrections::new(corrections_from_reference_station(
+                    &ephs,
+                    &base,
+                    ref_ecef,
+                    cfg.spp.elevation_mask_rad,
+                ))
+                .with_reference_position(ref_ecef),
+            )
         }
     };
     let have_dgps = dgps.is_some();

@@ -4,9 +4,11 @@
 //! and SYSTEM.md §3b (seed 000 eq. 13).
 //!
 //! Convention (as the simulator's dgps.csv): the corrected pseudorange at time t is
-//! `P + prc_m + rrc_mps (t - t_s)`; prc removes the satellite clock and orbit errors
-//! and the atmospheric delays seen at the reference station (models included), so a
-//! corrected pseudorange gets no ionosphere or troposphere model.
+//! `P + prc_m + rrc_mps (t - t_s)`, rrc = d(prc)/dt; prc removes the satellite clock
+//! and orbit errors and the atmospheric delays seen at the reference station (the
+//! broadcast models' part included), so a corrected pseudorange gets no ionosphere or
+//! troposphere model, only the models' difference between rover and station when
+//! the station position is known (`with_reference_position`).
 
 use crate::ephemeris::SPEED_OF_LIGHT_MPS;
 use crate::ephemeris_set::EphemerisSet;
@@ -45,6 +47,7 @@ pub struct DgpsCorrections {
     /// input wins the lookup).
     by_prn: Vec<Vec<DgpsCorrection>>,
     len: usize,
+    first_t_s: Option<f64>,
     /// Reference station antenna, ECEF [m], when known.
     reference_pos_ecef_m: Option<Vector3<f64>>,
 }
@@ -65,9 +68,15 @@ impl DgpsCorrections {
         for list in &mut by_prn {
             list.sort_by(|a, b| a.t_s.total_cmp(&b.t_s));
         }
+        let first_t_s = by_prn
+            .iter()
+            .filter_map(|l| l.first())
+            .map(|c| c.t_s)
+            .min_by(f64::total_cmp);
         DgpsCorrections {
             by_prn,
             len,
+            first_t_s,
             reference_pos_ecef_m: None,
         }
     }
@@ -100,11 +109,7 @@ impl DgpsCorrections {
 
     /// Earliest correction time [s], if any.
     pub fn first_t_s(&self) -> Option<f64> {
-        self.by_prn
-            .iter()
-            .filter_map(|l| l.first())
-            .map(|c| c.t_s)
-            .min_by(f64::total_cmp)
+        self.first_t_s
     }
 
     /// The latest correction for `prn` with `t_s` at or before `t_s` (1 ns tolerance),
@@ -148,6 +153,8 @@ struct RefPrn {
     epoch: usize,
     /// lambda L + c (dt_sv - TGD) - geometric range [m].
     carrier_minus_range_m: Option<f64>,
+    /// Carrier rate over the interval ending at this epoch [m/s], its length [s].
+    carrier_rate: Option<(f64, f64)>,
 }
 
 /// One satellite at one reference epoch.
@@ -157,9 +164,15 @@ struct RefSat {
     el_rad: f64,
     /// P + c (dt_sv - TGD) - range = c dt_ref + errors [m].
     code_res_m: f64,
-    /// d(code_res)/dt measured by the carrier (preferred) or the Doppler [m/s].
-    rate_mps: Option<f64>,
-    rate_from_carrier: bool,
+    /// d(code_res)/dt from the carrier: mean over the last interval [m/s], and
+    /// that interval [s].
+    carrier_rate: Option<(f64, f64)>,
+    /// The same extrapolated to this epoch [m/s].
+    carrier_rate_now_mps: Option<f64>,
+    /// d(code_res)/dt from the Doppler [m/s].
+    doppler_rate_mps: Option<f64>,
+    /// Carrier minus range, for the next epoch [m].
+    carrier_minus_range_m: Option<f64>,
 }
 
 /// Corrections computed by a reference station at `ref_pos_ecef_m` from its
@@ -176,11 +189,17 @@ struct RefSat {
 /// gap above 30 s. So the ms-level clock and its drift leave the corrections; what is
 /// left is common to all satellites and goes into the rover's clock states.
 ///
-/// `rrc = -(rate - drift_ref)`, rate the time difference of
-/// `lambda L + c (dt_sv - TGD) - rho` over the last interval when the carrier is
-/// continuous (LLI bit 0 clear, epoch flag 0), else `-lambda D + c d(dt_sv)/dt -
-/// d(rho)/dt`, else rrc = 0. The carrier sees the ionospheric rate with the phase
-/// sign: for the code the rrc is off by 2 dI/dt (mm/s in quiet conditions).
+/// `rrc = -(rate - drift_ref)`. The rate of `P - rho + c (dt_sv - TGD)` is measured
+/// by the time difference of `lambda L + c (dt_sv - TGD) - rho` over the last
+/// interval when the carrier is continuous (LLI bit 0 clear, epoch flag 0, previous
+/// epoch present), extrapolated from mid-interval to the epoch with the interval
+/// before (rrc is the rate at t_s); else by `-lambda D + c d(dt_sv)/dt - d(rho)/dt`;
+/// else rrc = 0. drift_ref is the weighted mean of the same kind of rate over the
+/// satellites with a continuous carrier (all, when none has one), so a carrier
+/// rate and a Doppler rate are both taken relative to the same satellites (a clock
+/// jump seen by the carrier, a Doppler bias cancel). The carrier sees the
+/// ionosphere's rate with the phase sign: for the code the rrc is off by 2 dI/dt
+/// (mm/s in quiet conditions).
 ///
 /// `t_s` is the true time (tag - dt_ref) in seconds of the first epoch's GPS week.
 pub fn corrections_from_reference_station(
@@ -209,11 +228,13 @@ pub fn corrections_from_reference_station(
             _ => 0.0,
         };
         let mut sats: Vec<RefSat> = Vec::new();
-        let mut raw: Vec<(u8, Option<f64>)> = Vec::new(); // carrier - range, per sat
         for _pass in 0..3 {
             sats.clear();
-            raw.clear();
             let t_true = ep.t.add_s(-clk_m / c);
+            // Interval since the previous epoch in true time (a clock jump changes it).
+            let dt_true = clock
+                .map(|(tp, x, _)| (t_tag - clk_m / c) - (tp - x / c))
+                .filter(|dt| continuous_epoch && *dt > 0.0);
             for s in &ep.sats {
                 let Some(p) = s.pseudorange_m.filter(|p| p.is_finite() && *p > 0.0) else {
                     continue;
@@ -230,22 +251,27 @@ pub fn corrections_from_reference_station(
                     continue;
                 }
                 let sat_clock_m = c * (sp.sat_clock_bias_s - eph.tgd_s);
-                let code_res_m = p + sat_clock_m - sp.geometric_range_m;
                 let cmr = s
                     .carrier_cycles
                     .filter(|l| l.is_finite())
                     .map(|l| GPS_L1_WAVELENGTH_M * l + sat_clock_m - sp.geometric_range_m);
-                let prev = prns.get(usize::from(s.prn)).copied().flatten();
-                // Over the true-time interval (a clock jump changes it).
-                let dt_true = clock.map(|(tp, x, _)| (t_tag - clk_m / c) - (tp - x / c));
-                let carrier_rate = match (cmr, prev, dt_true) {
-                    (Some(now), Some(pv), Some(dt))
-                        if continuous_epoch && s.lli & 1 == 0 && pv.epoch + 1 == k && dt > 0.0 =>
-                    {
-                        pv.carrier_minus_range_m.map(|before| (now - before) / dt)
-                    }
+                let prev = prns
+                    .get(usize::from(s.prn))
+                    .copied()
+                    .flatten()
+                    .filter(|pv| pv.epoch + 1 == k && s.lli & 1 == 0);
+                let before = prev.and_then(|p| p.carrier_minus_range_m);
+                let carrier = match (cmr, before, dt_true) {
+                    (Some(now), Some(before), Some(dt)) => Some(((now - before) / dt, dt)),
                     _ => None,
                 };
+                // The mean rate is the rate at mid-interval: extrapolate it to this
+                // epoch with the previous interval's (rrc is the rate at t_s).
+                let carrier_rate_now_mps =
+                    carrier.map(|(m, dt)| match prev.and_then(|p| p.carrier_rate) {
+                        Some((m_prev, dt_prev)) => m + (m - m_prev) * dt / (dt + dt_prev),
+                        None => m,
+                    });
                 let doppler_rate = s.doppler_hz.filter(|d| d.is_finite()).map(|d| {
                     -GPS_L1_WAVELENGTH_M * d + c * sp.sat_clock_drift_s_per_s - sp.range_rate_mps
                 });
@@ -253,11 +279,12 @@ pub fn corrections_from_reference_station(
                     prn: s.prn,
                     iode: eph.iode,
                     el_rad: el,
-                    code_res_m,
-                    rate_mps: carrier_rate.or(doppler_rate),
-                    rate_from_carrier: carrier_rate.is_some(),
+                    code_res_m: p + sat_clock_m - sp.geometric_range_m,
+                    carrier_rate: carrier,
+                    carrier_rate_now_mps,
+                    doppler_rate_mps: doppler_rate,
+                    carrier_minus_range_m: cmr,
                 });
-                raw.push((s.prn, cmr));
             }
             let Some(z) = weighted_mean(sats.iter().map(|s| (s.el_rad, Some(s.code_res_m)))) else {
                 break;
@@ -270,27 +297,20 @@ pub fn corrections_from_reference_station(
                 break;
             }
         }
-        // Forget what was not seen at this epoch.
-        for (prn, cmr) in &raw {
-            if let Some(slot) = prns.get_mut(usize::from(*prn)) {
-                *slot = Some(RefPrn {
-                    epoch: k,
-                    carrier_minus_range_m: *cmr,
-                });
-            }
-        }
         let Some(z) = weighted_mean(sats.iter().map(|s| (s.el_rad, Some(s.code_res_m)))) else {
             continue;
         };
-        // Epoch drift: carrier rates if any satellite has one, else Doppler rates.
-        let any_carrier = sats.iter().any(|s| s.rate_from_carrier);
-        let d = weighted_mean(sats.iter().map(|s| {
-            let r = s.rate_mps.filter(|_| s.rate_from_carrier == any_carrier);
-            (s.el_rad, r)
-        }));
+        // Clock drift over the interval: the mean carrier rate if any satellite has
+        // one, else the Doppler rate.
+        let any_carrier = sats.iter().any(|s| s.carrier_rate.is_some());
+        let d = if any_carrier {
+            weighted_mean(sats.iter().map(|s| (s.el_rad, s.carrier_rate.map(|r| r.0))))
+        } else {
+            weighted_mean(sats.iter().map(|s| (s.el_rad, s.doppler_rate_mps)))
+        };
         let (x, v) = match (clock, gap) {
             (Some((tp, x, v)), Some(dt)) if dt > 0.0 && dt <= REF_MAX_GAP_S => {
-                // The rates are over the true-time interval.
+                // Carrier rates are means over the true-time interval.
                 let dt_true = (t_tag - z / c) - (tp - x / c);
                 let pred = x + d.map_or(v * dt, |d| d * dt_true);
                 let innov = z - pred;
@@ -305,14 +325,43 @@ pub fn corrections_from_reference_station(
         };
         clock = Some((t_tag, x, v));
         let t_s = t_tag - x / c;
+        // The station's drift at this epoch, on the satellites that have carrier
+        // rates (else all), from those rates and from their Dopplers: each rrc is
+        // taken relative to the same satellites (a clock jump or a Doppler bias
+        // cancels), so what is common goes to the rover's clock drift.
+        let in_ref = |s: &RefSat| !any_carrier || s.carrier_rate.is_some();
+        let drift_now = weighted_mean(sats.iter().map(|s| {
+            let r = if any_carrier {
+                s.carrier_rate_now_mps
+            } else {
+                s.doppler_rate_mps
+            };
+            (s.el_rad, r)
+        }));
+        let drift_doppler = weighted_mean(
+            sats.iter()
+                .map(|s| (s.el_rad, s.doppler_rate_mps.filter(|_| in_ref(s)))),
+        );
         for s in &sats {
+            let rrc_mps = match (s.carrier_rate_now_mps, s.doppler_rate_mps) {
+                (Some(r), _) => drift_now.map_or(0.0, |d| d - r),
+                (None, Some(r)) => drift_doppler.map_or(0.0, |d| d - r),
+                _ => 0.0,
+            };
             out.push(DgpsCorrection {
                 t_s,
                 prn: s.prn,
                 prc_m: -(s.code_res_m - x),
-                rrc_mps: s.rate_mps.map_or(0.0, |r| -(r - v)),
+                rrc_mps,
                 iode: Some(s.iode),
             });
+            if let Some(slot) = prns.get_mut(usize::from(s.prn)) {
+                *slot = Some(RefPrn {
+                    epoch: k,
+                    carrier_minus_range_m: s.carrier_minus_range_m,
+                    carrier_rate: s.carrier_rate,
+                });
+            }
         }
     }
     out
@@ -333,7 +382,7 @@ fn weighted_mean(items: impl Iterator<Item = (f64, Option<f64>)>) -> Option<f64>
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::tight_prep::tests::{ephemerides, observe, t0, Receiver};
+    use crate::tight_prep::tests::{ephemerides, observe, t0, Receiver, NO_ATM};
 
     fn corr(t_s: f64, prn: u8, prc_m: f64, iode: Option<u16>) -> DgpsCorrection {
         DgpsCorrection {
@@ -404,10 +453,12 @@ mod tests {
         let lli_prn = 13u8;
         let epochs: Vec<ObsEpoch> = (0..25)
             .map(|k| {
-                let mut ep = observe(&ephs, t0(), f64::from(k), &station, false, &extra);
+                let mut ep = observe(&ephs, t0(), f64::from(k), &station, NO_ATM, &extra);
                 for s in &mut ep.sats {
-                    // A Doppler bias shows where the rrc came from the Doppler.
-                    s.doppler_hz = s.doppler_hz.map(|d| d + 0.5);
+                    // A common Doppler bias cancels; one satellite's shows where its
+                    // rrc came from the Doppler.
+                    let bias_hz = if s.prn == lli_prn { 0.7 } else { 0.2 };
+                    s.doppler_hz = s.doppler_hz.map(|d| d + bias_hz);
                     if k >= 12 {
                         s.carrier_cycles =
                             s.carrier_cycles.map(|l| l - jump_m / GPS_L1_WAVELENGTH_M);
@@ -426,7 +477,7 @@ mod tests {
             5f64.to_radians(),
         );
         assert!(out.iter().any(|c| c.prn == faulty) && out.iter().any(|c| c.prn == lli_prn));
-        let doppler_bias_mps = 0.5 * GPS_L1_WAVELENGTH_M;
+        let doppler_bias_mps = 0.5 * GPS_L1_WAVELENGTH_M; // 0.7 - 0.2 Hz
         for k in 0..25 {
             let dt = f64::from(k);
             let tag = t0().sow + dt;
@@ -452,13 +503,13 @@ mod tests {
                 assert_eq!(c.iode, ephs.select(c.prn, t0()).map(|e| e.iode));
             }
             // rrc + error rate: common too, except where it came from the (biased)
-            // Doppler while the others had the carrier.
+            // Doppler while the others had the carrier (epoch 0: all Doppler).
             let rrc: Vec<(u8, f64)> = at_k
                 .iter()
                 .map(|c| (c.prn, c.rrc_mps + extra(c.prn, 0.0).1))
                 .collect();
             let others = rrc.iter().find(|r| r.0 != lli_prn).unwrap().1;
-            for (prn, r) in &rrc {
+            for (prn, r) in rrc.iter().filter(|_| k > 0) {
                 let expect = if k == 5 && *prn == lli_prn {
                     doppler_bias_mps
                 } else {

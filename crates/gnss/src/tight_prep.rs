@@ -5,11 +5,15 @@
 //! DGPS correction or the Klobuchar and Saastamoinen models). See docs/GNSS.md,
 //! "Tight-coupling measurements and DGPS".
 //!
-//! Conventions (P pseudorange, L carrier [cycles], D Doppler [Hz]):
+//! Conventions (P pseudorange, L carrier [cycles], D Doppler [Hz], I and T the
+//! broadcast model delays at the receiver, I_s and T_s at the DGPS station):
 //! `P = rho + c dt_r - c (dt_sv - TGD) + I + T`, `lambda L = rho + c dt_r - c dt_sv - I +
-//! T + lambda N`. Prepared: `pseudorange_m = P + c (dt_sv - TGD) - I - T` (or `+ prc +
-//! rrc (t - t_s)` with DGPS), `carrier_m = lambda L + c (dt_sv - TGD) [+ integrated
-//! rrc]`, `range_rate_mps = -lambda D + c d(dt_sv)/dt [+ rrc]`.
+//! T + lambda N`. Prepared:
+//! - `pseudorange_m = P + c (dt_sv - TGD) - I - T`, or with DGPS
+//!   `P + c (dt_sv - TGD) + prc + rrc (t - t_s) - (I + T - I_s - T_s)`;
+//! - `carrier_m = lambda L + c (dt_sv - TGD) + I - T`, with DGPS plus the integral of
+//!   rrc and the change of `I_s + T_s` since the start of the arc;
+//! - `range_rate_mps = -lambda D + c d(dt_sv)/dt [+ rrc]` (atmospheric rates left).
 
 use crate::dgps::{DgpsCorrection, DgpsCorrections};
 use crate::ephemeris::SPEED_OF_LIGHT_MPS;
@@ -28,6 +32,10 @@ use navfuse_core::{GnssFix, GnssRawEpoch, SatMeasurement};
 /// A DGPS correction time-tagged up to this much after the measurement is taken as
 /// the same epoch's (receiver clocks are steered within 1 ms of GPS time) [s].
 const DGPS_SAME_EPOCH_S: f64 = 1e-3;
+
+/// Gain and longest gap [s] of the smoothed model position.
+const MODEL_POS_GAIN: f64 = 0.05;
+const MODEL_POS_MAX_GAP_S: f64 = 10.0;
 
 /// Settings of the preparation.
 #[derive(Clone, Debug, PartialEq)]
@@ -79,7 +87,9 @@ struct PrnState {
     has_carrier: bool,
     /// DGPS range-rate correction applied [m/s].
     rrc_mps: Option<f64>,
-    /// Integrated rrc added to the carrier [m].
+    /// Station model delays I + T (the rover's without a station position) [m].
+    station_model_m: f64,
+    /// Integrated rrc and station model change added to the carrier [m].
     acc_m: f64,
 }
 
@@ -117,6 +127,8 @@ pub struct EpochPreparer {
     /// Index = PRN.
     prns: Vec<Option<PrnState>>,
     last: Option<RxEstimate>,
+    /// Smoothed position for the atmosphere models: (tag [s], ECEF [m], velocity).
+    model_pos: Option<(f64, Vector3<f64>, Option<Vector3<f64>>)>,
     epoch: u64,
 }
 
@@ -128,6 +140,7 @@ impl EpochPreparer {
             dgps,
             prns: vec![None; 256],
             last: None,
+            model_pos: None,
             epoch: 0,
         }
     }
@@ -158,34 +171,40 @@ impl EpochPreparer {
             .map(|s| self.dgps_for(s.prn, epoch.t, t_query_s))
             .collect();
 
-        // For the SPP, the model difference to the station at the predicted position
-        // (none before the first: the rover is taken at the station).
-        let approx_pos = predicted.map(|p| p.pos_ecef_m);
-        let meas: Vec<SppMeasurement> = epoch
-            .sats
-            .iter()
-            .zip(&corrs)
-            .filter_map(|(s, corr)| {
-                let dgps_prc_m = corr.map(|k| {
-                    let diff = match (approx_pos, self.ephs.select(s.prn, epoch.t)) {
-                        (Some(p), Some(eph)) => {
-                            let sat = eph.sat_state(epoch.t).pos_ecef_m;
-                            self.model_difference_m(&sat, &p, epoch.t.sow)
-                        }
-                        _ => 0.0,
-                    };
-                    k.at_m(t_est_s) - diff
-                });
-                Some(SppMeasurement {
-                    prn: s.prn,
-                    pseudorange_m: s.pseudorange_m?,
-                    doppler_hz: s.doppler_hz,
-                    dgps_prc_m,
+        // SPP measurements; with DGPS the model difference to the station at
+        // `approx` (none without a position: the rover is taken at the station).
+        let measurements = |approx: Option<Vector3<f64>>| -> Vec<SppMeasurement> {
+            let model_diff = |prn| self.model_difference_m(prn, epoch.t, approx);
+            epoch
+                .sats
+                .iter()
+                .zip(&corrs)
+                .filter_map(|(s, corr)| {
+                    Some(SppMeasurement {
+                        prn: s.prn,
+                        pseudorange_m: s.pseudorange_m?,
+                        // range rate -lambda D + rrc: the DGPS rate enters the velocity
+                        doppler_hz: s
+                            .doppler_hz
+                            .map(|d| d - corr.map_or(0.0, |k| k.rrc_mps) / GPS_L1_WAVELENGTH_M),
+                        dgps_prc_m: corr.map(|k| k.at_m(t_est_s) - model_diff(s.prn)),
+                    })
                 })
-            })
-            .collect();
+                .collect()
+        };
         let start = predicted.map(|p| (p.pos_ecef_m, p.clock_m));
-        let spp = solve_epoch(&self.ephs, epoch.t, &meas, &self.cfg.spp, start);
+        let mut meas = measurements(predicted.map(|p| p.pos_ecef_m));
+        let mut spp = solve_epoch(&self.ephs, epoch.t, &meas, &self.cfg.spp, start);
+        let station_known = self
+            .dgps
+            .as_ref()
+            .and_then(|d| d.reference_pos_ecef_m())
+            .is_some();
+        if let (None, true, Ok(first)) = (predicted, station_known, &spp) {
+            // First fix with a located station: redo with the model difference there.
+            meas = measurements(Some(first.pos_ecef_m));
+            spp = solve_epoch(&self.ephs, epoch.t, &meas, &self.cfg.spp, start);
+        }
         // A failed residual test still locates the receiver well enough for the
         // geometry (100 m moves a satellite by ~1 mm): refit without FDE, no fix.
         let geometry = match &spp {
@@ -227,6 +246,7 @@ impl EpochPreparer {
         };
 
         let t_s = t_tag_s - rx.clock_m / c;
+        let model_pos = self.smoothed_position(&rx);
         let fix = spp.as_ref().ok().map(|s| fix_from_spp(s, t_s));
         let mut sats: Vec<SatMeasurement> = Vec::with_capacity(epoch.sats.len());
         let (mut dgps_applied, mut dgps_missing) = (0, 0);
@@ -234,7 +254,7 @@ impl EpochPreparer {
             if sats.iter().any(|m| m.prn == s.prn) {
                 continue;
             }
-            let Some(m) = self.prepare_sat(epoch, s, *corr, &rx, t_s) else {
+            let Some(m) = self.prepare_sat(epoch, s, *corr, &rx, &model_pos, t_s) else {
                 continue;
             };
             if m.pseudorange_m.is_some() {
@@ -266,25 +286,60 @@ impl EpochPreparer {
         Some(k)
     }
 
-    /// Broadcast model delays (iono + tropo, as configured) at the rover minus at the
-    /// DGPS reference station, for a satellite at `sat_pos_ecef_m` [m]; 0 when the
-    /// station position is unknown.
-    fn model_difference_m(
+    /// The position at which the atmosphere models are evaluated: the SPP position
+    /// smoothed by a complementary filter (predicted with the mean Doppler velocity,
+    /// pulled towards each position with gain 0.05), so that the SPP's metres of
+    /// noise do not reach the carrier through the models' height gradient (the
+    /// troposphere changes by 1.6 mm per metre of height at 10 deg elevation).
+    fn smoothed_position(&mut self, rx: &RxEstimate) -> Vector3<f64> {
+        let pos = match self.model_pos {
+            Some((t0, p0, Some(v0))) => {
+                let dt = rx.t_tag_s - t0;
+                match rx.vel_ecef_mps {
+                    Some(v) if dt > 0.0 && dt <= MODEL_POS_MAX_GAP_S => {
+                        let pred = p0 + 0.5 * (v0 + v) * dt;
+                        pred + MODEL_POS_GAIN * (rx.pos_ecef_m - pred)
+                    }
+                    _ => rx.pos_ecef_m,
+                }
+            }
+            _ => rx.pos_ecef_m,
+        };
+        self.model_pos = Some((rx.t_tag_s, pos, rx.vel_ecef_mps));
+        pos
+    }
+
+    /// Broadcast model delays (iono, tropo) as configured [m] at `pos_ecef_m` for a
+    /// satellite at `sat_pos_ecef_m`, at `sow` (GPS s of week).
+    fn models_at_m(
         &self,
+        pos_ecef_m: &Vector3<f64>,
         sat_pos_ecef_m: &Vector3<f64>,
-        rx_pos_ecef_m: &Vector3<f64>,
         sow: f64,
-    ) -> f64 {
-        let Some(ref_pos) = self.dgps.as_ref().and_then(|d| d.reference_pos_ecef_m()) else {
+    ) -> (f64, f64) {
+        let lla = ecef_to_lla(pos_ecef_m);
+        let (az, el) = az_el(&lla, &(sat_pos_ecef_m - pos_ecef_m).normalize());
+        self.cfg.spp.atmosphere_m(&lla, az, el, sow)
+    }
+
+    /// Models at `rx_pos_ecef_m` minus at the DGPS station for `prn` at `t` (no light
+    /// time: the elevation only), 0 when either position is unknown [m].
+    fn model_difference_m(&self, prn: u8, t: GpsTime, rx_pos_ecef_m: Option<Vector3<f64>>) -> f64 {
+        let (Some(rx), Some(eph)) = (rx_pos_ecef_m, self.ephs.select(prn, t)) else {
             return 0.0;
         };
-        let model = |p: &Vector3<f64>| {
-            let lla = ecef_to_lla(p);
-            let (az, el) = az_el(&lla, &(sat_pos_ecef_m - p).normalize());
-            let (iono_m, tropo_m) = self.cfg.spp.atmosphere_m(&lla, az, el, sow);
-            iono_m + tropo_m
+        let sat = eph.sat_state(t).pos_ecef_m;
+        let Some((iono_s, tropo_s)) = self.station_models_m(&sat, t.sow) else {
+            return 0.0;
         };
-        model(rx_pos_ecef_m) - model(&ref_pos)
+        let (iono, tropo) = self.models_at_m(&rx, &sat, t.sow);
+        iono + tropo - iono_s - tropo_s
+    }
+
+    /// The same at the DGPS reference station, when its position is known.
+    fn station_models_m(&self, sat_pos_ecef_m: &Vector3<f64>, sow: f64) -> Option<(f64, f64)> {
+        let station = self.dgps.as_ref()?.reference_pos_ecef_m()?;
+        Some(self.models_at_m(&station, sat_pos_ecef_m, sow))
     }
 
     /// One satellite; None without an ephemeris or usable observable, or below the
@@ -295,6 +350,7 @@ impl EpochPreparer {
         s: &SatObs,
         corr: Option<DgpsCorrection>,
         rx: &RxEstimate,
+        model_pos_ecef_m: &Vector3<f64>,
         t_s: f64,
     ) -> Option<SatMeasurement> {
         let c = SPEED_OF_LIGHT_MPS;
@@ -312,27 +368,23 @@ impl EpochPreparer {
         // Light time at the true reception time (tag - clock), as spp.rs.
         let t_true = epoch.t.add_s(-rx.clock_m / c);
         let sp = signal_path(eph, &rx.pos_ecef_m, &vel, t_true);
-        let (az, el) = az_el(&lla, &sp.los_unit);
+        let (_, el) = az_el(&lla, &sp.los_unit);
         if el.is_nan() || el < cfg.elevation_mask_rad {
             return None;
         }
         // IS-GPS-200 20.3.3.3.3.2: the L1 C/A user's satellite clock is dt_sv - TGD.
         let sat_clock_m = c * (sp.sat_clock_bias_s - eph.tgd_s);
-        let (iono_m, tropo_m) = match corr {
-            Some(_) => (0.0, 0.0),
-            None => cfg.atmosphere_m(&lla, az, el, epoch.t.sow),
-        };
+        // Broadcast models at the rover and at the DGPS station (taken equal when its
+        // position is unknown: then the rover is assumed near it).
+        let (iono_m, tropo_m) = self.models_at_m(model_pos_ecef_m, &sp.sat_pos_ecef_m, epoch.t.sow);
+        let (iono_s_m, tropo_s_m) = self
+            .station_models_m(&sp.sat_pos_ecef_m, epoch.t.sow)
+            .unwrap_or((iono_m, tropo_m));
+        // Code: the correction holds the station's delays, models included.
         let pseudorange_m = pr.map(|p| {
             p + sat_clock_m
                 + match corr {
-                    Some(k) => {
-                        k.at_m(t_s)
-                            - self.model_difference_m(
-                                &sp.sat_pos_ecef_m,
-                                &rx.pos_ecef_m,
-                                epoch.t.sow,
-                            )
-                    }
+                    Some(k) => k.at_m(t_s) - (iono_m + tropo_m - iono_s_m - tropo_s_m),
                     None => -iono_m - tropo_m,
                 }
         });
@@ -350,12 +402,20 @@ impl EpochPreparer {
         let slot = self.prns.get_mut(usize::from(s.prn))?;
         let prev = slot.filter(|p| p.epoch + 1 == self.epoch && p.has_carrier);
         let lost_lock = epoch.flag != 0 || s.lli & 1 != 0 || prev.is_none();
-        // Integrated rrc (trapezoid); restarts with each carrier arc.
+        // Carrier: the rover's models with the phase sign (-I + T) are removed (a
+        // climbing UAV's troposphere changes by cm/s). With DGPS the integrated rrc
+        // (trapezoids) is added, and the change of the station's models (I + T),
+        // which rrc = d(prc)/dt removes with the code sign, put back. Restarts with
+        // each arc; no increment across an epoch pair without DGPS, so the carrier
+        // stays continuous when DGPS comes and goes.
+        let station_model_m = iono_s_m + tropo_s_m;
         let acc_m = match prev {
-            Some(p) if !lost_lock => {
-                let mean_rrc = 0.5 * (p.rrc_mps.unwrap_or(0.0) + rrc_mps.unwrap_or(0.0));
-                p.acc_m + mean_rrc * (t_s - p.t_s)
-            }
+            Some(p) if !lost_lock => match (p.rrc_mps, rrc_mps) {
+                (Some(a), Some(b)) => {
+                    p.acc_m + 0.5 * (a + b) * (t_s - p.t_s) + station_model_m - p.station_model_m
+                }
+                _ => p.acc_m,
+            },
             _ => 0.0,
         };
         *slot = Some(PrnState {
@@ -363,6 +423,7 @@ impl EpochPreparer {
             t_s,
             has_carrier: cycles.is_some(),
             rrc_mps,
+            station_model_m,
             acc_m,
         });
         Some(SatMeasurement {
@@ -374,7 +435,7 @@ impl EpochPreparer {
             pseudorange_std_m: pr_var.sqrt(),
             range_rate_mps,
             range_rate_std_mps: self.cfg.doppler_sigma_mps * el_scale,
-            carrier_m: cycles.map(|l| lambda * l + sat_clock_m + acc_m),
+            carrier_m: cycles.map(|l| lambda * l + sat_clock_m + iono_m - tropo_m + acc_m),
             carrier_std_m: self.cfg.carrier_sigma_m * el_scale,
             lost_lock,
             dgps: corr.is_some() && pseudorange_m.is_some(),
@@ -474,7 +535,7 @@ pub(crate) mod tests {
         t0: GpsTime,
         dt_s: f64,
         rx: &Receiver,
-        atmosphere: bool,
+        atm: Atm,
         extra: &dyn Fn(u8, f64) -> (f64, f64),
     ) -> ObsEpoch {
         let t_tag = t0.add_s(dt_s);
@@ -486,21 +547,42 @@ pub(crate) mod tests {
         for prn in ephs.prns() {
             let eph = ephs.select(prn, t_tag).unwrap();
             let sp = signal_path(eph, &pos, &rx.vel_ecef_mps, t_true);
-            let (az, el) = az_el(&lla, &sp.los_unit);
+            let (_, el) = az_el(&lla, &sp.los_unit);
             if el < 5f64.to_radians() {
                 continue;
             }
-            let (iono, tropo) = if atmosphere {
+            // Delays at the tag + h (geometry moved on by h).
+            let delays = |h: f64| -> (f64, f64) {
+                let pos = rx.pos(dt_s + h - clock / C);
+                let lla = ecef_to_lla(&pos);
+                let sp = signal_path(eph, &pos, &rx.vel_ecef_mps, t_true.add_s(h));
+                let (az, el) = az_el(&lla, &sp.los_unit);
+                let sow = t_tag.sow + h;
                 (
-                    klobuchar_l1_delay_m(&ALPHA, &BETA, lla.x, lla.y, az, el, t_tag.sow),
-                    saastamoinen_slant_m(lla.x, lla.z, el),
+                    if atm.iono {
+                        klobuchar_l1_delay_m(&ALPHA, &BETA, lla.x, lla.y, az, el, sow)
+                    } else {
+                        0.0
+                    },
+                    if atm.tropo {
+                        saastamoinen_slant_m(lla.x, lla.z, el)
+                    } else {
+                        0.0
+                    },
                 )
-            } else {
-                (0.0, 0.0)
             };
+            let (iono, tropo) = delays(0.0);
+            // The phase sees -I + T; the Doppler its rate (central difference).
+            let phase_atm = |h: f64| {
+                let (i, t) = delays(h);
+                t - i
+            };
+            let atm_rate = (phase_atm(0.05) - phase_atm(-0.05)) / 0.1;
             let (e, e_rate) = extra(prn, dt_s - clock / C);
             let geo = sp.geometric_range_m + clock - C * (sp.sat_clock_bias_s - eph.tgd_s) + e;
-            let rr = sp.range_rate_mps + rx.drift_mps - C * sp.sat_clock_drift_s_per_s + e_rate;
+            let rr = sp.range_rate_mps + rx.drift_mps - C * sp.sat_clock_drift_s_per_s
+                + e_rate
+                + atm_rate;
             sats.push(SatObs {
                 prn,
                 pseudorange_m: Some(geo + iono + tropo),
@@ -524,16 +606,34 @@ pub(crate) mod tests {
         (0.0, 0.0)
     }
 
-    pub(crate) fn config(models: bool) -> TightPrepConfig {
+    /// Which broadcast-model delays the data hold and the preparation models.
+    #[derive(Clone, Copy)]
+    pub(crate) struct Atm {
+        pub iono: bool,
+        pub tropo: bool,
+    }
+    pub(crate) const NO_ATM: Atm = Atm {
+        iono: false,
+        tropo: false,
+    };
+    pub(crate) const TROPO: Atm = Atm {
+        iono: false,
+        tropo: true,
+    };
+    pub(crate) const BOTH: Atm = Atm {
+        iono: true,
+        tropo: true,
+    };
+
+    pub(crate) fn config(atm: Atm) -> TightPrepConfig {
         let mut cfg = TightPrepConfig::default();
-        if models {
+        if atm.iono {
             cfg.spp.iono = IonoModel::Klobuchar {
                 alpha: ALPHA,
                 beta: BETA,
             };
-        } else {
-            cfg.spp.tropo_saastamoinen = false;
         }
+        cfg.spp.tropo_saastamoinen = atm.tropo;
         cfg
     }
 
@@ -571,17 +671,25 @@ pub(crate) mod tests {
     fn satellite_clock_and_models_are_removed() {
         let ephs = ephemerides();
         let rx = Receiver::rover();
-        let ep = observe(&ephs, t0(), 0.0, &rx, true, &no_extra);
-        let mut prep = EpochPreparer::new(ephs, config(true), None);
+        let ep = observe(&ephs, t0(), 0.0, &rx, BOTH, &no_extra);
+        let mut prep = EpochPreparer::new(ephs, config(BOTH), None);
         let p = prep.prepare(&ep, 2381);
         let spp = p.spp.as_ref().unwrap();
         assert!(p.raw.sats.len() >= 6, "{}", p.raw.sats.len());
         // Satellites between 5 and 10 deg are dropped, as in the SPP.
         assert_eq!(p.raw.sats.len(), spp.n_used);
         assert!(p.raw.sats.len() < ep.sats.len());
-        for (prn, pr, rr, _) in residuals(&p, &rx, 0.0) {
+        for (prn, pr, rr, cr) in residuals(&p, &rx, 0.0) {
             assert!(pr.abs() < 1e-3, "G{prn:02} pseudorange residual {pr} m");
-            assert!(rr.abs() < 1e-3, "G{prn:02} range-rate residual {rr} m/s");
+            // (the Doppler keeps the atmosphere's rate, here < 1 cm/s)
+            assert!(rr.abs() < 0.01, "G{prn:02} range-rate residual {rr} m/s");
+            // The carrier loses the models too (phase sign): lambda N is left.
+            let n = 1000.0 * f64::from(prn) * GPS_L1_WAVELENGTH_M;
+            assert!(
+                (cr - n).abs() < 1e-3,
+                "G{prn:02} carrier residual {}",
+                cr - n
+            );
         }
         for m in &p.raw.sats {
             assert!(m.elevation_rad >= 10f64.to_radians());
@@ -598,10 +706,11 @@ pub(crate) mod tests {
         assert!((lla_to_ecef(&fix.lla) - rx.pos_at_tag(0.0)).norm() < 1e-3);
         let lla = ecef_to_lla(&rx.pos_at_tag(0.0));
         let v_ned = c_ne(lla.x, lla.y).transpose() * rx.vel_ecef_mps;
-        assert!((fix.vel_ned.unwrap() - v_ned).norm() < 1e-3);
+        // (the Doppler velocity has the atmosphere's rates in it: < 1 cm/s)
+        assert!((fix.vel_ned.unwrap() - v_ned).norm() < 0.01);
         assert!(fix.std_ned.iter().all(|s| *s > 0.0));
         // A reference week one earlier: t counts on past 604800.
-        let p = EpochPreparer::new(ephemerides(), config(true), None).prepare(&ep, 2380);
+        let p = EpochPreparer::new(ephemerides(), config(BOTH), None).prepare(&ep, 2380);
         assert!((p.raw.t - (604_800.0 + t0().sow + 1.5e-3)).abs() < 1e-9);
     }
 
@@ -609,8 +718,8 @@ pub(crate) mod tests {
     fn carrier_continuity_and_lost_lock() {
         let ephs = ephemerides();
         let rx = Receiver::rover();
-        let mut prep = EpochPreparer::new(ephs.clone(), config(false), None);
-        let first = observe(&ephs, t0(), 0.0, &rx, false, &no_extra);
+        let mut prep = EpochPreparer::new(ephs.clone(), config(NO_ATM), None);
+        let first = observe(&ephs, t0(), 0.0, &rx, NO_ATM, &no_extra);
         let prns: Vec<u8> = prep
             .prepare(&first, 2381)
             .raw
@@ -621,7 +730,7 @@ pub(crate) mod tests {
         let (a, b, d) = (prns[0], prns[1], prns[2]);
         for k in 1..7 {
             let dt = f64::from(k);
-            let mut ep = observe(&ephs, t0(), dt, &rx, false, &no_extra);
+            let mut ep = observe(&ephs, t0(), dt, &rx, NO_ATM, &no_extra);
             match k {
                 2 => ep.sats.iter_mut().find(|s| s.prn == a).unwrap().lli = 1,
                 3 => {
@@ -661,17 +770,17 @@ pub(crate) mod tests {
     fn no_position_no_satellites_then_the_last_solution() {
         let ephs = ephemerides();
         let rx = Receiver::rover();
-        let mut prep = EpochPreparer::new(ephs.clone(), config(false), None);
-        let mut three = observe(&ephs, t0(), 0.0, &rx, false, &no_extra);
+        let mut prep = EpochPreparer::new(ephs.clone(), config(NO_ATM), None);
+        let mut three = observe(&ephs, t0(), 0.0, &rx, NO_ATM, &no_extra);
         three.sats.truncate(3);
         let p = prep.prepare(&three, 2381);
         assert!(p.spp.is_err() && p.raw.sats.is_empty() && p.raw.fix.is_none());
         assert_eq!(p.raw.t, t0().sow);
-        let good = observe(&ephs, t0(), 1.0, &rx, false, &no_extra);
+        let good = observe(&ephs, t0(), 1.0, &rx, NO_ATM, &no_extra);
         assert!(prep.prepare(&good, 2381).spp.is_ok());
         // Three satellites: no SPP, but the last solution (moved on with its velocity
         // and clock drift) places them; the range rate still fits.
-        let mut three = observe(&ephs, t0(), 2.0, &rx, false, &no_extra);
+        let mut three = observe(&ephs, t0(), 2.0, &rx, NO_ATM, &no_extra);
         three.sats.truncate(3);
         let p = prep.prepare(&three, 2381);
         assert!(p.spp.is_err() && p.raw.fix.is_none());
@@ -687,8 +796,8 @@ pub(crate) mod tests {
         let rx = Receiver::rover();
         // Errors common to the rover and the reference station: a bias and a drift
         // per satellite, and +7 m on one satellite.
-        let faulty = EpochPreparer::new(ephs.clone(), config(true), None)
-            .prepare(&observe(&ephs, t0(), 0.0, &rx, false, &no_extra), 2381)
+        let faulty = EpochPreparer::new(ephs.clone(), config(TROPO), None)
+            .prepare(&observe(&ephs, t0(), 0.0, &rx, NO_ATM, &no_extra), 2381)
             .raw
             .sats[2]
             .prn;
@@ -698,7 +807,10 @@ pub(crate) mod tests {
             let bias = 3.0 * (p * 1.7).sin() + if prn == faulty { 7.0 } else { 0.0 };
             (bias + rate * dt, rate)
         };
-        // Reference station 10 km away, static, with its own clock that jumps 1 ms.
+        // Reference station 10 km away and 6.5 km up, static, with its own clock
+        // that jumps 1 ms. Data and preparation have the tropospheric model (the
+        // phase and code see the troposphere alike, so the station's carrier rrc
+        // has it with the code sign).
         let ref_pos = rx.pos0_ecef_m + Vector3::new(6e3, -6e3, 5e3);
         let station = Receiver {
             pos0_ecef_m: ref_pos,
@@ -708,7 +820,7 @@ pub(crate) mod tests {
             jump: Some((12.0, -1e-3 * C)),
         };
         let ref_epochs: Vec<ObsEpoch> = (0..40)
-            .map(|k| observe(&ephs, t0(), f64::from(k), &station, false, &extra))
+            .map(|k| observe(&ephs, t0(), f64::from(k), &station, TROPO, &extra))
             .collect();
         let corr = crate::dgps::corrections_from_reference_station(
             &ephs,
@@ -717,15 +829,15 @@ pub(crate) mod tests {
             5f64.to_radians(),
         );
         assert!(corr.len() > 300, "{}", corr.len());
-        let store = DgpsCorrections::new(corr);
-        // The models are configured: a corrected satellite must not get them.
-        let mut prep = EpochPreparer::new(ephs.clone(), config(true), Some(store.clone()));
-        let mut plain = EpochPreparer::new(ephs.clone(), config(true), None);
-        let mut plain_ok = EpochPreparer::new(ephs.clone(), config(true), None);
+        let store = DgpsCorrections::new(corr).with_reference_position(ref_pos);
+        // A corrected satellite gets the model difference to the station only.
+        let mut prep = EpochPreparer::new(ephs.clone(), config(TROPO), Some(store.clone()));
+        let mut plain = EpochPreparer::new(ephs.clone(), config(TROPO), None);
+        let mut plain_ok = EpochPreparer::new(ephs.clone(), config(TROPO), None);
         let mut first: Vec<(u8, f64)> = Vec::new();
         for k in 0..40 {
             let dt = f64::from(k);
-            let ep = observe(&ephs, t0(), dt, &rx, false, &extra);
+            let ep = observe(&ephs, t0(), dt, &rx, TROPO, &extra);
             let p = prep.prepare(&ep, 2381);
             assert_eq!(p.dgps_applied, p.raw.sats.len());
             assert_eq!(p.dgps_missing, 0);
@@ -743,8 +855,9 @@ pub(crate) mod tests {
                 "epoch {k}: pseudorange spread {}",
                 spread(&|r| r.1)
             );
+            // (the Doppler keeps the troposphere's rate, which differs 6.5 km up)
             assert!(
-                spread(&|r| r.2) < 1e-3,
+                spread(&|r| r.2) < 0.01,
                 "epoch {k}: range-rate spread {}",
                 spread(&|r| r.2)
             );
@@ -768,8 +881,9 @@ pub(crate) mod tests {
                 assert!((m.pseudorange_std_m - var.sqrt()).abs() < 1e-12);
             }
             // Without DGPS the +7 m stays in the faulty satellite's pseudorange.
+            let ep = observe(&ephs, t0(), dt, &rx, TROPO, &extra);
             let with = residuals(&plain.prepare(&ep, 2381), &rx, dt);
-            let ep = observe(&ephs, t0(), dt, &rx, false, &|prn, dt| {
+            let ep = observe(&ephs, t0(), dt, &rx, TROPO, &|prn, dt| {
                 let (e, r) = extra(prn, dt);
                 (e - if prn == faulty { 7.0 } else { 0.0 }, r)
             });
@@ -782,10 +896,54 @@ pub(crate) mod tests {
             }
         }
         // Corrections older than the age limit are not used: fall back to the models.
-        let late = observe(&ephs, t0(), 39.0 + 31.0, &rx, false, &extra);
+        let late = observe(&ephs, t0(), 39.0 + 31.0, &rx, TROPO, &extra);
         let p = prep.prepare(&late, 2381);
         assert_eq!(p.dgps_applied, 0);
         assert_eq!(p.dgps_missing, p.raw.sats.len());
         assert!(p.raw.sats.iter().all(|m| !m.dgps));
+    }
+
+    #[test]
+    fn dgps_station_below_the_rover_model_difference() {
+        // Station 1.5 km lower and ~7 km away; the data hold exactly the model
+        // delays (ionosphere and troposphere). Code only: the station's carrier
+        // rrc has the ionosphere's rate with the phase sign.
+        let ephs = ephemerides();
+        let rx = Receiver::rover();
+        let lla = ecef_to_lla(&rx.pos0_ecef_m);
+        let station = Receiver {
+            pos0_ecef_m: lla_to_ecef(&Vector3::new(lla.x + 0.001, lla.y - 0.001, 100.0)),
+            vel_ecef_mps: Vector3::zeros(),
+            clock0_m: 300.0,
+            drift_mps: 0.5,
+            jump: None,
+        };
+        let ref_epochs: Vec<ObsEpoch> = (0..10)
+            .map(|k| observe(&ephs, t0(), f64::from(k), &station, BOTH, &no_extra))
+            .collect();
+        let mask = 5f64.to_radians();
+        let store = DgpsCorrections::new(crate::dgps::corrections_from_reference_station(
+            &ephs,
+            &ref_epochs,
+            station.pos0_ecef_m,
+            mask,
+        ));
+        let located = store.clone().with_reference_position(station.pos0_ecef_m);
+        let mut prep = EpochPreparer::new(ephs.clone(), config(BOTH), Some(located));
+        let mut unlocated = EpochPreparer::new(ephs.clone(), config(BOTH), Some(store));
+        let spread = |v: &[f64]| {
+            v.iter().cloned().fold(f64::MIN, f64::max) - v.iter().cloned().fold(f64::MAX, f64::min)
+        };
+        for k in 0..10 {
+            let dt = f64::from(k);
+            let ep = observe(&ephs, t0(), dt, &rx, BOTH, &no_extra);
+            let res = residuals(&prep.prepare(&ep, 2381), &rx, dt);
+            let pr: Vec<f64> = res.iter().map(|r| r.1).collect();
+            assert!(spread(&pr) < 2e-3, "epoch {k}: {pr:?}");
+            // Without the station position the tropospheric difference stays in.
+            let res = residuals(&unlocated.prepare(&ep, 2381), &rx, dt);
+            let pr: Vec<f64> = res.iter().map(|r| r.1).collect();
+            assert!(spread(&pr) > 0.3, "epoch {k}: {pr:?}");
+        }
     }
 }
