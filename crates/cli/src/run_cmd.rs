@@ -315,10 +315,12 @@ pub fn run_job(mut cfg: RunConfig, out_dir: &Path, progress: bool) -> Result<Job
     } else {
         None
     };
-    let mut csv_w = if cfg.output.csv {
+    // With the integrity monitor, solution.csv carries its flag column.
+    let monitor_on = cfg.nav.integrity.enabled;
+    let mut csv_w = if cfg.output.csv || monitor_on {
         files.push(out_dir.join("solution.csv"));
         Some(
-            CsvWriter::create(files.last().unwrap(), cfg.output.std)
+            CsvWriter::create(files.last().unwrap(), cfg.output.std, monitor_on)
                 .map_err(|e| anyhow::anyhow!("{e}"))?,
         )
     } else {
@@ -405,6 +407,7 @@ pub fn run_job(mut cfg: RunConfig, out_dir: &Path, progress: bool) -> Result<Job
                 nav: navfuse_core::NavState { t, ..nav },
                 imu_errors: *n.imu_errors(),
                 std: if want_std { Some(n.std21()) } else { None },
+                gnss_integrity: monitor_on.then(|| n.integrity_state().flag()),
             });
             if batch.len() == BATCH {
                 send(&mut batch)?;
@@ -455,6 +458,39 @@ pub fn run_job(mut cfg: RunConfig, out_dir: &Path, progress: bool) -> Result<Job
         writeln!(ev, "{e}")?;
     }
     files.push(ev_path);
+    if monitor_on {
+        // Integrity transitions as a table (they are also in events.log).
+        let p = out_dir.join("integrity.csv");
+        let mut w =
+            std::fs::File::create(&p).with_context(|| format!("cannot create {}", p.display()))?;
+        writeln!(w, "t_s,from,to,detector,statistic,threshold")?;
+        let mut spoofed = 0;
+        for e in &summary.events {
+            if let navfuse_core::engine::Event::Integrity(tr) = e {
+                spoofed += usize::from(tr.to == navfuse_core::integrity::IntegrityState::Spoofed);
+                writeln!(
+                    w,
+                    "{:.3},{},{},{},{:.4},{}",
+                    tr.t,
+                    tr.from.name(),
+                    tr.to.name(),
+                    tr.detector.name(),
+                    tr.statistic,
+                    if tr.threshold.is_finite() {
+                        format!("{:.4}", tr.threshold)
+                    } else {
+                        String::new()
+                    }
+                )?;
+            }
+        }
+        files.push(p);
+        if progress && spoofed > 0 {
+            eprintln!(
+                "navfuse: GNSS integrity: declared spoofed {spoofed} time(s) (see integrity.csv)"
+            );
+        }
+    }
     if progress {
         for n in &input_notes {
             eprintln!("navfuse: note: {n}");

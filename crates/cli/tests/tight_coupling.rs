@@ -3,7 +3,12 @@
 
 mod common;
 use common::{navfuse_ok, shared, tmp};
+use nalgebra::Vector3;
+use navfuse_core::earth::lla_diff_ned;
+use navfuse_io::nav::read_nav;
 use serde_json::Value;
+use std::collections::HashMap;
+use std::path::Path;
 
 /// Our SPP's horizontal RMS on the walk against the RTK-fixed epochs [m]
 /// (crates/cli/tests/spp_walk.rs prints it: 8.32 m with 4 satellites, no ionosphere
@@ -66,4 +71,84 @@ fn seed000_dgps_tdcp_beats_tight_doppler() {
         m * 100.0
     );
     assert!(m >= 0.80, "{m}");
+}
+
+/// Position error vectors NED [m] of `solution.nav` against `truth.nav` at the whole
+/// seconds `t0 .. t1` (both files hold those epochs).
+fn errors_ned(sol: &Path, truth: &Path, t0: f64, t1: f64) -> Vec<(f64, Vector3<f64>)> {
+    let key = |t: f64| (t * 100.0).round() as i64;
+    let truth: HashMap<i64, Vector3<f64>> = read_nav(truth)
+        .unwrap()
+        .into_iter()
+        .map(|(_, s)| (key(s.t), s.lla))
+        .collect();
+    read_nav(sol)
+        .unwrap()
+        .into_iter()
+        .filter(|(_, s)| s.t >= t0 - 1e-6 && s.t <= t1 + 1e-6 && (s.t - s.t.round()).abs() < 1e-6)
+        .map(|(_, s)| (s.t, lla_diff_ned(&s.lla, &truth[&key(s.t)])))
+        .collect()
+}
+
+/// scenarios/blockage_2sat.toml: a car, 60 s with only the 2 highest satellites. The
+/// loose filter gets no fix and coasts; the tight filter keeps 2 pseudoranges and 2
+/// TDCP range rates. Drift = the largest change of the position error vector over
+/// the blockage (the error at its start is the GNSS error, not drift). The tight
+/// drift must be at least 3x smaller, without and with the NHC (a car's usual aid).
+#[test]
+fn blockage_2sat_tight_drifts_3x_less_than_loose() {
+    let dir = tmp("blockage");
+    navfuse_ok(&[
+        "sim",
+        "scenarios/blockage_2sat.toml",
+        "--out",
+        dir.to_str().unwrap(),
+        "-q",
+    ]);
+    let base = std::fs::read_to_string(dir.join("run.toml")).unwrap();
+    assert!(base.contains("coupling = \"tight\""), "{base}");
+    let t_start = 345600.0;
+    let (b0, b1) = (t_start + 200.0, t_start + 260.0);
+    let mut drift = HashMap::new();
+    for coupling in ["loose", "tight"] {
+        for nhc in [false, true] {
+            let mut text = base.replace(
+                "coupling = \"tight\"",
+                &format!("coupling = \"{coupling}\""),
+            );
+            if nhc {
+                text.push_str("\n[nhc]\nmode = \"always\"\n");
+            }
+            let name = format!("{coupling}{}", if nhc { "_nhc" } else { "" });
+            let cfg = dir.join(format!("{name}.toml"));
+            std::fs::write(&cfg, text).unwrap();
+            let out = dir.join(&name);
+            navfuse_ok(&[
+                "run",
+                cfg.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+                "-q",
+            ]);
+            let e = errors_ned(&out.join("solution.nav"), &dir.join("truth.nav"), b0, b1);
+            assert_eq!(e.len(), 61, "{name}: epochs in the blockage");
+            let d = e
+                .iter()
+                .map(|(_, v)| (v - e[0].1).norm())
+                .fold(0.0, f64::max);
+            eprintln!("blockage 2 satellites, {name}: drift {d:.2} m over 60 s");
+            drift.insert(name, d);
+        }
+    }
+    for suffix in ["", "_nhc"] {
+        let (l, t) = (
+            drift[&format!("loose{suffix}")],
+            drift[&format!("tight{suffix}")],
+        );
+        assert!(
+            t * 3.0 <= l,
+            "loose{suffix} {l:.2} m vs tight{suffix} {t:.2} m: not 3x"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -396,6 +396,8 @@ pub struct NavConfig {
     pub imu_noise: ImuNoise,
     /// Tight coupling (used when the GNSS input is per-satellite measurements).
     pub tight: TightOptions,
+    /// GNSS integrity monitor against spoofing (off by default).
+    pub integrity: crate::integrity::IntegrityOptions,
     pub initial: InitialState,
     pub gnss: GnssOptions,
     pub filter: FilterOptions,

@@ -22,6 +22,7 @@ use crate::config::{AttitudeInit, NavConfig, NhcMode, RangeRate};
 use crate::earth::{c_ne, lla_add_ned, lla_diff_ned, lla_to_ecef};
 use crate::error_model::{fill_f, fill_qc, Discretizer, MeanMotion};
 use crate::filter::{chi2_threshold, Eskf, UpdateOutcome};
+use crate::integrity::{EpochCheck, IntegrityMonitor, IntegrityState, Transition};
 use crate::mechanization::Mechanizer;
 use crate::state::{Block, StateLayout, ATT, BA, BG, N_INS, POS, SA, SG, VEL};
 use crate::static_detect::StaticDetector;
@@ -56,14 +57,17 @@ pub enum Event {
     /// The receiver clock bias state was (re)set from the pseudoranges: at the first
     /// epoch, or after a clock jump of `jump_m`.
     ClockReset { t: f64, jump_m: f64 },
-    /// A carrier-phase cycle slip (TDCP innovation `jump_m` over the interval beyond
-    /// the test `threshold_m`); the satellite's carrier differencing restarts.
+    /// A carrier-phase cycle slip: the carrier jump `jump_m` over the interval
+    /// estimated against the INS and the other satellites, with its w-test statistic
+    /// `w`; the satellite's carrier differencing restarts.
     CycleSlip {
         t: f64,
         prn: u8,
         jump_m: f64,
-        threshold_m: f64,
+        w: f64,
     },
+    /// The GNSS integrity monitor changed state (spoofing detection).
+    Integrity(Transition),
 }
 
 impl std::fmt::Display for Event {
@@ -89,14 +93,25 @@ impl std::fmt::Display for Event {
                 f,
                 "{t:.3} receiver clock bias set from the pseudoranges (step {jump_m:.1} m)"
             ),
-            Event::CycleSlip {
-                t,
-                prn,
-                jump_m,
-                threshold_m,
-            } => write!(
+            Event::Integrity(tr) => {
+                let th = if tr.threshold.is_finite() {
+                    format!(" > {:.2}", tr.threshold)
+                } else {
+                    String::new()
+                };
+                write!(
+                    f,
+                    "{:.3} GNSS integrity: {} -> {} ({} {:.2}{th})",
+                    tr.t,
+                    tr.from.name(),
+                    tr.to.name(),
+                    tr.detector.name(),
+                    tr.statistic
+                )
+            }
+            Event::CycleSlip { t, prn, jump_m, w } => write!(
                 f,
-                "{t:.3} G{prn:02} cycle slip: carrier jump {jump_m:.3} m against the INS (test {threshold_m:.3} m)"
+                "{t:.3} G{prn:02} cycle slip: carrier jump {jump_m:.3} m against the INS (w-test {w:.1})"
             ),
             Event::Static { t, begins } => {
                 if *begins {
@@ -189,6 +204,8 @@ pub struct Navigator {
     next_nhc_t: f64,
     next_zupt_t: f64,
     tight: TightState,
+    /// GNSS integrity monitor (spoofing), when enabled.
+    monitor: Option<IntegrityMonitor>,
     summary: RunSummary,
 }
 
@@ -327,6 +344,10 @@ impl Navigator {
                 last_imu_ecef_m: lla_to_ecef(&lla),
                 ..Default::default()
             },
+            monitor: cfg
+                .integrity
+                .enabled
+                .then(|| IntegrityMonitor::new(cfg.integrity.clone())),
             summary: RunSummary {
                 first_t: t0,
                 last_t: t0,
@@ -625,8 +646,18 @@ impl Navigator {
         }
         let use_vel = g.use_velocity;
         let mut gate = self.gate3;
+        if self.monitor.is_some() {
+            // The monitor replaces the gate (and its timeout, which would re-admit a
+            // spoofer): it tests the fix against the INS/odometer prediction.
+            let pos = Aiding::GnssPosition(&f);
+            if !self.integrity_check(fix.t, &[pos], Some(pos)) {
+                self.summary.gnss_rejected += 1;
+                return;
+            }
+            gate = None;
+        }
         if let (Some(t0), Some(_)) = (self.reject_streak_since, gate) {
-            if fix.t - t0 >= g.gate_timeout_s {
+            if fix.t - t0 >= self.cfg.gnss.gate_timeout_s {
                 gate = None;
                 self.summary.events.push(Event::GateBypassed {
                     t: fix.t,
@@ -658,8 +689,8 @@ impl Navigator {
     }
 
     /// Tightly coupled update with one receiver epoch (SYSTEM.md §3b): the clock
-    /// bias is (re)set when needed, then each satellite's pseudorange, then its range
-    /// rate (Doppler or TDCP), as scalar updates with a per-satellite gate.
+    /// bias is (re)set when needed, then the range rates (Doppler or TDCP), then the
+    /// pseudoranges, each kind tested jointly per satellite and fused as scalar updates.
     pub fn update_tight(&mut self, epoch: &GnssRawEpoch) {
         if !self.cfg.tight.enabled {
             return;
@@ -683,21 +714,55 @@ impl Navigator {
             })
             .collect();
         self.check_clock(epoch.t, &sats);
-        let mut used = false;
-        if opt.use_pseudorange {
-            for s in sats.iter().filter(|s| s.pseudorange_m.is_some()) {
-                used |= self.fuse(Aiding::Pseudorange(s), gate) == Fused::Applied;
+        if self.monitor.is_some() {
+            // The epoch as a whole: the receiver's own fix against the prediction
+            // (distance), and all pseudoranges jointly (chi-square).
+            let fix_pos = epoch.fix.as_ref().map(|f| Aiding::GnssPosition(f));
+            let prs: Vec<Aiding> = sats
+                .iter()
+                .filter(|s| s.pseudorange_m.is_some())
+                .map(Aiding::Pseudorange)
+                .collect();
+            if !self.integrity_check(epoch.t, &prs, fix_pos) {
+                // Nothing of this epoch is used; carrier differencing restarts.
+                self.tight.prev_t = None;
+                self.summary.gnss_rejected += 1;
+                return;
             }
         }
+        let mut used = false;
+        // Each kind is tested jointly against the prior (data snooping), so a faulty
+        // satellite is found whatever its place in the list; the rest are fused.
+        // Range rates first: TDCP compares the carrier with the INS displacement since
+        // the previous epoch, which must still match the state (a pseudorange update
+        // before it would change the velocity but not that displacement).
+        let w_max = gate.map(f64::sqrt);
+        let beyond_gate = |_: &Aiding, w: f64, _: f64| w_max.is_some_and(|m| w.abs() > m);
         match opt.range_rate {
             RangeRate::None => {}
             RangeRate::Doppler => {
-                for s in sats.iter().filter(|s| s.range_rate_mps.is_some()) {
-                    used |= self.fuse(Aiding::Doppler(s), gate) == Fused::Applied;
-                }
+                let rows: Vec<Aiding> = sats
+                    .iter()
+                    .filter(|s| s.range_rate_mps.is_some())
+                    .map(Aiding::Doppler)
+                    .collect();
+                used |= self.fuse_snooped(&rows, beyond_gate, |_, _, _| {});
             }
             RangeRate::Tdcp => used |= self.fuse_tdcp(epoch.t, &sats),
         }
+        if opt.use_pseudorange {
+            let rows: Vec<Aiding> = sats
+                .iter()
+                .filter(|s| s.pseudorange_m.is_some())
+                .map(Aiding::Pseudorange)
+                .collect();
+            used |= self.fuse_snooped(&rows, beyond_gate, |_, _, _| {});
+        }
+        // The next TDCP interval starts from the attitude after all of this epoch's
+        // updates.
+        let c_bn = self.nav.q_bn.to_rotation_matrix().into_inner();
+        self.tight.prev_lever_ecef_m =
+            c_ne(self.nav.lla.x, self.nav.lla.y) * c_bn * self.cfg.gnss.lever_arm_b;
         if used {
             self.summary.gnss_used += 1;
             self.last_gnss_used_t = epoch.t;
@@ -761,30 +826,37 @@ impl Navigator {
                 - self.tight.prev_lever_ecef_m,
             dt_s: t - t0,
         });
-        let mut used = false;
-        for s in sats {
-            let (Some(iv), Some(prev)) = (interval, self.tight.prev[s.prn as usize]) else {
-                continue;
-            };
-            if s.lost_lock || s.carrier_m.is_none() || iv.dt_s > opt.tdcp_max_gap_s {
-                continue;
-            }
-            // Cycle-slip test against the INS prediction (innovation and its sigma).
-            if let Some((y, s_var)) = self.innovation(Aiding::Tdcp(s, prev, iv)) {
-                let threshold = (opt.slip_sigma * s_var.sqrt()).max(opt.slip_min_m / iv.dt_s);
-                if y.abs() > threshold {
-                    self.summary.events.push(Event::CycleSlip {
-                        t,
-                        prn: s.prn,
-                        jump_m: y * iv.dt_s,
-                        threshold_m: threshold * iv.dt_s,
-                    });
-                    *self.summary.aiding_rejected.entry("tdcp").or_default() += 1;
-                    continue;
+        let mut rows = Vec::new();
+        if let Some(iv) = interval.filter(|iv| iv.dt_s <= opt.tdcp_max_gap_s) {
+            for s in sats
+                .iter()
+                .filter(|s| !s.lost_lock && s.carrier_m.is_some())
+            {
+                if let Some(prev) = self.tight.prev[s.prn as usize] {
+                    rows.push(Aiding::Tdcp(s, prev, iv));
                 }
-                used |= self.fuse(Aiding::Tdcp(s, prev, iv), None) == Fused::Applied;
             }
         }
+        // Cycle-slip test against the INS prediction, all satellites jointly: a slip is
+        // a carrier jump beyond slip_sigma (w-test) and beyond slip_min_m.
+        let slipped = |a: &Aiding, w: f64, blunder: f64| match a {
+            Aiding::Tdcp(_, _, iv) => {
+                w.abs() > opt.slip_sigma && (blunder * iv.dt_s).abs() > opt.slip_min_m
+            }
+            _ => false,
+        };
+        let mut slips = Vec::new();
+        let used = self.fuse_snooped(&rows, slipped, |a, w, blunder| {
+            if let Aiding::Tdcp(s, _, iv) = a {
+                slips.push(Event::CycleSlip {
+                    t,
+                    prn: s.prn,
+                    jump_m: blunder * iv.dt_s,
+                    w,
+                });
+            }
+        });
+        self.summary.events.extend(slips);
         // Remember this epoch (after the updates: the displacement restarts here).
         for p in self.tight.prev.iter_mut() {
             *p = None;
@@ -799,22 +871,120 @@ impl Navigator {
                 });
             }
         }
-        let c_bn = self.nav.q_bn.to_rotation_matrix().into_inner();
-        self.tight.prev_lever_ecef_m =
-            c_ne(self.nav.lla.x, self.nav.lla.y) * c_bn * self.cfg.gnss.lever_arm_b;
         self.tight.prev_t = Some(t);
         self.tight.imu_displacement_ecef_m = Vector3::zeros();
         self.tight.last_imu_ecef_m = lla_to_ecef(&self.nav.lla);
         used
     }
 
-    /// Innovation and its variance H P H^T + R of a one-row measurement.
-    fn innovation(&mut self, aiding: Aiding) -> Option<(f64, f64)> {
+    /// Run the integrity monitor on one GNSS epoch; true if it may be fused. The NIS
+    /// is taken over `nis_rows` jointly (loose: the fix position, 3 dof; tight: all
+    /// pseudoranges), the distance is |innovation| of `distance_row` (the fix
+    /// position; None: the distance test abstains).
+    fn integrity_check(
+        &mut self,
+        t: f64,
+        nis_rows: &[Aiding],
+        distance_row: Option<Aiding>,
+    ) -> bool {
         self.flush_covariance();
         let ctx = self.context(self.tight.clock);
-        let lin = aiding.linearize(&ctx)?;
-        let s = (&lin.h * &self.filter.p * lin.h.transpose())[(0, 0)] + lin.r[(0, 0)];
-        Some((lin.y[0], s))
+        let stack = |list: &[Aiding]| -> Option<crate::aiding::Linearized> {
+            let lins: Vec<_> = list.iter().filter_map(|a| a.linearize(&ctx)).collect();
+            let m: usize = lins.iter().map(|l| l.y.len()).sum();
+            if m == 0 {
+                return None;
+            }
+            let n = ctx.layout.len();
+            let (mut y, mut h, mut r) = (
+                DVector::zeros(m),
+                DMatrix::zeros(m, n),
+                DMatrix::zeros(m, m),
+            );
+            let mut k = 0;
+            for l in &lins {
+                let d = l.y.len();
+                y.rows_mut(k, d).copy_from(&l.y);
+                h.rows_mut(k, d).copy_from(&l.h);
+                r.view_mut((k, k), (d, d)).copy_from(&l.r);
+                k += d;
+            }
+            Some(crate::aiding::Linearized { y, h, r })
+        };
+        let dist_lin = distance_row.and_then(|a| stack(&[a]));
+        let Some(lin) = stack(nis_rows) else {
+            return true;
+        };
+        let nis = self.filter.nis(&lin.y, &lin.h, &lin.r).unwrap_or(f64::NAN);
+        let check = EpochCheck {
+            t,
+            distance_m: dist_lin.map_or(f64::NAN, |l| l.y.norm()),
+            nis,
+            dof: lin.y.len(),
+        };
+        let monitor = self.monitor.as_mut().expect("monitor enabled");
+        let v = monitor.check(&check);
+        if let Some(tr) = v.transition {
+            self.summary.events.push(Event::Integrity(tr));
+        }
+        v.use_gnss
+    }
+
+    /// Integrity state of the GNSS (trusted when no monitor runs).
+    pub fn integrity_state(&self) -> IntegrityState {
+        self.monitor
+            .as_ref()
+            .map_or(IntegrityState::Trusted, |m| m.state())
+    }
+
+    /// Fuse one-row measurements after data snooping: test them jointly against the
+    /// prior (Baarda's w-test, [`crate::filter::Eskf::blunder_test`]), drop the worst
+    /// while `is_blunder(row, w, blunder)` holds for it (reported through `rejected`
+    /// and counted as rejected), then fuse the rest. True if any was applied.
+    fn fuse_snooped(
+        &mut self,
+        rows: &[Aiding],
+        is_blunder: impl Fn(&Aiding, f64, f64) -> bool,
+        mut rejected: impl FnMut(&Aiding, f64, f64),
+    ) -> bool {
+        self.flush_covariance();
+        let mut keep: Vec<(Aiding, crate::aiding::Linearized)> = {
+            let ctx = self.context(self.tight.clock);
+            rows.iter()
+                .filter_map(|a| a.linearize(&ctx).map(|lin| (*a, lin)))
+                .collect()
+        };
+        while !keep.is_empty() {
+            let n = self.layout.len();
+            let m = keep.len();
+            let mut y = DVector::zeros(m);
+            let mut h = DMatrix::zeros(m, n);
+            let mut r = DMatrix::zeros(m, m);
+            for (i, (_, lin)) in keep.iter().enumerate() {
+                y[i] = lin.y[0];
+                h.row_mut(i).copy_from(&lin.h.row(0));
+                r[(i, i)] = lin.r[(0, 0)];
+            }
+            let Some(tests) = self.filter.blunder_test(&y, &h, &r) else {
+                break;
+            };
+            let worst = tests
+                .iter()
+                .enumerate()
+                .filter(|(i, (w, b))| is_blunder(&keep[*i].0, *w, *b))
+                .max_by(|a, b| a.1 .0.abs().total_cmp(&b.1 .0.abs()));
+            let Some((i, &(w, b))) = worst else {
+                break;
+            };
+            let (a, _) = keep.remove(i);
+            rejected(&a, w, b);
+            *self.summary.aiding_rejected.entry(a.name()).or_default() += 1;
+        }
+        let mut used = false;
+        for (a, _) in keep {
+            used |= self.fuse(a, None) == Fused::Applied;
+        }
+        used
     }
 
     /// Course over ground from the fix velocity, or from the displacement since the
@@ -1410,6 +1580,7 @@ mod tests {
             heading: Default::default(),
             zupt: Default::default(),
             tight: Default::default(),
+            integrity: Default::default(),
             start_time: f64::NEG_INFINITY,
             end_time: None,
         }

@@ -100,6 +100,37 @@ impl Eskf {
         UpdateOutcome::Applied { dx, nis }
     }
 
+    /// Normalised innovation squared y^T S^-1 y with S = H P H^T + R, without
+    /// updating; None when S is singular.
+    pub fn nis(&self, y: &DVector<f64>, h: &DMatrix<f64>, r: &DMatrix<f64>) -> Option<f64> {
+        let s = h * &self.p * h.transpose() + r;
+        let v = y.dot(&s.cholesky()?.solve(y));
+        v.is_finite().then_some(v)
+    }
+
+    /// Baarda's w-test of a batch of measurements against the prior, for data
+    /// snooping (one blunder at a time): with y ~ H dx + v and S = H P H^T + R,
+    /// w_i = (S^-1 y)_i / sqrt((S^-1)_ii) is N(0, 1) when row i has no blunder, and
+    /// (S^-1 y)_i / (S^-1)_ii estimates the blunder of row i. Returns (w_i, blunder_i)
+    /// per row, or None when S is singular. The rows are tested jointly, so the test
+    /// does not depend on their order.
+    pub fn blunder_test(
+        &self,
+        y: &DVector<f64>,
+        h: &DMatrix<f64>,
+        r: &DMatrix<f64>,
+    ) -> Option<Vec<(f64, f64)>> {
+        let s = h * &self.p * h.transpose() + r;
+        let s_inv = s.cholesky()?.inverse();
+        let g = &s_inv * y;
+        (0..y.len())
+            .map(|i| {
+                let d = s_inv[(i, i)];
+                (d > 0.0 && g[i].is_finite()).then(|| (g[i] / d.sqrt(), g[i] / d))
+            })
+            .collect()
+    }
+
     /// 1-sigma of each state.
     pub fn std(&self, i: usize) -> f64 {
         self.p[(i, i)].max(0.0).sqrt()

@@ -20,6 +20,7 @@ use navfuse_core::config::{
     NhcMode, NhcOptions, OdometerOptions, RangeRate, TightOptions, TimeOffsetConfig,
     VehicleOptions, ZuptOptions, DEFAULT_COVARIANCE_PERIOD_S, DEFAULT_GATE_TIMEOUT_S,
 };
+use navfuse_core::integrity::IntegrityOptions;
 use navfuse_core::outage::{OutageSchedule, Periodic, Window};
 use navfuse_core::types::ImuErrors;
 use serde::de::{self, IgnoredAny, MapAccess, SeqAccess, Visitor};
@@ -537,6 +538,8 @@ struct TomlRoot {
     nhc: Option<TNhc>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     zupt: Option<TZupt>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    spoofing: Option<TSpoofing>,
     #[serde(default)]
     filter: TFilter,
     #[serde(default)]
@@ -924,6 +927,27 @@ struct THeading {
     course_std_floor_deg: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     gate_probability: Option<Gate>,
+}
+
+/// `[spoofing]`: the GNSS integrity monitor (navfuse_core::integrity).
+#[derive(Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct TSpoofing {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    enabled: Option<bool>,
+    /// R [m] or false.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    distance_m: Option<Gate>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    chi2_probability: Option<Gate>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    window_epochs: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    window_probability: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    confirm_epochs: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    readmit_s: Option<f64>,
 }
 
 #[derive(Debug, Deserialize, Serialize)]
@@ -1363,6 +1387,10 @@ fn convert(raw: TomlRoot, base: &Path) -> KResult<Converted> {
         Some(h) => convert_heading(h, base)?,
         None => (None, HeadingOptions::default()),
     };
+    let integrity = match &raw.spoofing {
+        Some(x) => convert_spoofing(x)?,
+        None => IntegrityOptions::default(),
+    };
     let zupt = match &raw.zupt {
         Some(z) => convert_zupt(z)?,
         None => ZuptOptions::default(),
@@ -1371,6 +1399,7 @@ fn convert(raw: TomlRoot, base: &Path) -> KResult<Converted> {
     let nav = NavConfig {
         imu_noise,
         tight,
+        integrity,
         initial,
         gnss: gnss_opts,
         filter: FilterOptions {
@@ -1745,6 +1774,72 @@ fn convert_heading(h: &THeading, base: &Path) -> KResult<(Option<HeadingSource>,
         )?,
     };
     Ok((src, opts))
+}
+
+fn convert_spoofing(x: &TSpoofing) -> KResult<IntegrityOptions> {
+    let d = IntegrityOptions::default();
+    let count = |key: &str, v: Option<f64>, dflt: usize, min: f64| -> KResult<usize> {
+        match v {
+            None => Ok(dflt),
+            Some(n) if n.fract() == 0.0 && n >= min && n <= 1e6 => Ok(n as usize),
+            Some(n) => Err(kerr(
+                key,
+                format!("expected a whole number >= {min}, got {n}"),
+            )),
+        }
+    };
+    let distance_m = match x.distance_m {
+        None => d.distance_m,
+        Some(Gate::Off) => None,
+        Some(Gate::Probability(r)) => Some(positive("spoofing.distance_m", r)?),
+    };
+    let window_probability = opt_or(
+        "spoofing.window_probability",
+        x.window_probability,
+        probability,
+        same,
+        d.window_probability,
+    )?;
+    Ok(IntegrityOptions {
+        enabled: x.enabled.unwrap_or(true),
+        distance_m,
+        chi2_probability: gate(
+            "spoofing.chi2_probability",
+            x.chi2_probability,
+            d.chi2_probability,
+        )?,
+        window_epochs: count(
+            "spoofing.window_epochs",
+            x.window_epochs,
+            d.window_epochs,
+            0.0,
+        )?,
+        window_probability,
+        confirm_epochs: count(
+            "spoofing.confirm_epochs",
+            x.confirm_epochs,
+            d.confirm_epochs,
+            1.0,
+        )?,
+        readmit_s: opt_or(
+            "spoofing.readmit_s",
+            x.readmit_s,
+            non_negative,
+            same,
+            d.readmit_s,
+        )?,
+    })
+}
+
+fn probability(key: &str, p: f64) -> KResult<f64> {
+    if (1e-15..0.5).contains(&p) {
+        Ok(p)
+    } else {
+        Err(kerr(
+            key,
+            format!("expected a probability in [1e-15, 0.5), got {p}"),
+        ))
+    }
 }
 
 fn convert_zupt(z: &TZupt) -> KResult<ZuptOptions> {
@@ -2654,6 +2749,16 @@ fn to_raw(c: &RunConfig) -> TomlRoot {
         angular_rate_std_dps: Some(r2d(z.angular_rate_std)),
         max_speed_mps: Some(z.max_speed_mps),
     };
+    let sp = &c.nav.integrity;
+    let spoofing = sp.enabled.then(|| TSpoofing {
+        enabled: Some(true),
+        distance_m: Some(sp.distance_m.map_or(Gate::Off, Gate::Probability)),
+        chi2_probability: Some(Gate::from_option(sp.chi2_probability)),
+        window_epochs: Some(sp.window_epochs as f64),
+        window_probability: Some(sp.window_probability),
+        confirm_epochs: Some(sp.confirm_epochs as f64),
+        readmit_s: Some(sp.readmit_s),
+    });
     TomlRoot {
         imu,
         gnss,
@@ -2668,6 +2773,7 @@ fn to_raw(c: &RunConfig) -> TomlRoot {
         vehicle: Some(vehicle),
         nhc: Some(nhc),
         zupt: Some(zupt),
+        spoofing,
         filter,
         output: TOutput {
             rate_hz: c.output.rate_hz,
@@ -3071,6 +3177,7 @@ fn kfgins_to_raw(y: KfYaml, w: &mut Vec<String>) -> KResult<(TomlRoot, Option<St
         vehicle: None,
         nhc: None,
         zupt: None,
+        spoofing: None,
         filter: TFilter {
             covariance_period_s: None,
             time_offset: None,

@@ -36,6 +36,9 @@ pub struct SolutionRecord {
     /// [rad], gyro bias xyz [rad/s], accel bias xyz [m/s²], gyro scale xyz [-], accel
     /// scale xyz [-].
     pub std: Option<[f64; 21]>,
+    /// GNSS integrity flag (navfuse_core::integrity::IntegrityState::flag: 0 trusted,
+    /// 1 suspect, 2 spoofed, 3 recovering) when the monitor runs.
+    pub gnss_integrity: Option<u8>,
 }
 
 /// The 11 `.nav` values: week, t, lat [deg], lon [deg], h [m], vN vE vD [m/s],
@@ -264,19 +267,29 @@ std_sax_ppm,std_say_ppm,std_saz_ppm";
 pub struct CsvWriter {
     out: Out,
     with_std: bool,
+    with_integrity: bool,
 }
 
 impl CsvWriter {
-    pub fn create(path: &Path, with_std: bool) -> Result<Self, InputError> {
+    /// `with_integrity`: a last column `gnss_integrity` (0 trusted, 1 suspect, 2
+    /// spoofed, 3 recovering; empty for a record without it).
+    pub fn create(path: &Path, with_std: bool, with_integrity: bool) -> Result<Self, InputError> {
         let mut out = Out::create(path)?;
         out.line.extend_from_slice(CSV_NAV_HEADER.as_bytes());
         if with_std {
             out.line.push(b',');
             out.line.extend_from_slice(CSV_STD_HEADER.as_bytes());
         }
+        if with_integrity {
+            out.line.extend_from_slice(b",gnss_integrity");
+        }
         out.line.push(b'\n');
         out.put()?;
-        Ok(CsvWriter { out, with_std })
+        Ok(CsvWriter {
+            out,
+            with_std,
+            with_integrity,
+        })
     }
 
     pub fn write(&mut self, r: &SolutionRecord) -> Result<(), InputError> {
@@ -296,6 +309,12 @@ impl CsvWriter {
                     }
                 }
                 None => line.extend_from_slice(&[b','; 21]),
+            }
+        }
+        if self.with_integrity {
+            line.push(b',');
+            if let Some(f) = r.gnss_integrity {
+                line.extend_from_slice(f.to_string().as_bytes());
             }
         }
         line.push(b'\n');
@@ -423,6 +442,7 @@ mod tests {
                 accel_scale: Vector3::new(1e-6, 2e-6, 3e-6),
             },
             std: Some([0.01; 21]),
+            gnss_integrity: None,
         }
     }
 

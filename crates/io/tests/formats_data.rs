@@ -288,6 +288,7 @@ fn truth_nav_and_kfgins_output_round_trip() {
             nav: *nav,
             imu_errors: ImuErrors::default(),
             std: None,
+            gnss_integrity: None,
         })
         .unwrap();
     }
@@ -391,6 +392,7 @@ fn speed_write_kfgins_outputs() {
                     accel_scale: Vector3::new(-1e-4, 2e-4, 3e-4),
                 },
                 std: Some([1e-3 + 1e-9 * x; 21]),
+                gnss_integrity: None,
             };
             nav.write(&r).unwrap();
             err.write(&r).unwrap();
@@ -443,7 +445,7 @@ fn speed_write_kfgins_outputs() {
         736 * n / 1_000_000,
         t0.elapsed().as_secs_f64()
     );
-    let mut csv = CsvWriter::create(&dir.join("a.csv"), true).unwrap();
+    let mut csv = CsvWriter::create(&dir.join("a.csv"), true, false).unwrap();
     let t0 = Instant::now();
     for (_, nav) in (0..n).map(|k| {
         (
@@ -461,6 +463,7 @@ fn speed_write_kfgins_outputs() {
             nav,
             imu_errors: ImuErrors::default(),
             std: Some([0.01; 21]),
+            gnss_integrity: None,
         })
         .unwrap();
     }

@@ -89,9 +89,20 @@ fn constellation(
     let week = sc.file.start.gps_week as i32;
     // Nominal ephemerides referenced to the start (the nearest even hour).
     let toe_sow = (sc.file.start.time_s / 7200.0).round() * 7200.0;
+    // Synthetic ephemerides broadcast the URA of the simulated signal-in-space error
+    // (orbit, satellite clock, SA), as the control segment would: a receiver weights
+    // its pseudoranges by it. A RINEX file keeps its own values.
+    let e = &g.errors;
+    let ura_m = (e.orbit_m.powi(2) + e.sat_clock_m.powi(2) + e.sa_m.powi(2)).sqrt();
+    let with_ura = |mut ephs: Vec<GpsEphemeris>| {
+        for eph in ephs.iter_mut() {
+            eph.sv_accuracy_m = ura_m;
+        }
+        ephs
+    };
     match g.constellation.as_str() {
-        "nominal24" => Ok((nominal_gps24(GpsTime::new(week, toe_sow)), None)),
-        "seed000" => Ok((seed000_table3(week), None)),
+        "nominal24" => Ok((with_ura(nominal_gps24(GpsTime::new(week, toe_sow))), None)),
+        "seed000" => Ok((with_ura(seed000_table3(week)), None)),
         _ => {
             let p = sc
                 .base_dir()
@@ -288,6 +299,7 @@ pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError>
             },
             imu_errors: *e,
             std: None,
+            gnss_integrity: None,
         };
         tw.write(&rec)?;
         if let Some(w) = ew {
@@ -616,9 +628,13 @@ fn write_run_config(sc: &Scenario, dir: &Path, files: &mut Vec<String>) -> Resul
     );
     let gs = tiny(grade.gyro.scale_sigma * 1e6, 1.0);
     let asc = tiny(grade.accel.scale_sigma * 1e6, 1.0);
+    // One Gauss-Markov state per bias carries both the turn-on bias (a constant) and
+    // the in-run instability, so its correlation time is at least 1 h (as in
+    // `navfuse reproduce`): a short one would let the filter forget the turn-on bias
+    // it has learnt within that time whenever the aiding is weak.
     let tau_h = {
         let t = grade.gyro.bias_corr_time_s;
-        if t.is_finite() && t > 0.0 {
+        if t.is_finite() && t > 3600.0 {
             t / 3600.0
         } else {
             1.0
@@ -640,10 +656,17 @@ fn write_run_config(sc: &Scenario, dir: &Path, files: &mut Vec<String>) -> Resul
         sc.imu.rate_hz
     );
     if let Some(gs_) = &sc.file.gnss {
+        let l = gs_.antenna_lever_arm_m;
         if gs_.fix.is_some() {
-            let l = gs_.antenna_lever_arm_m;
             s.push_str(&format!(
                 "[gnss]\nfile = \"gnss.txt\"\nformat = \"kf-gins\"\nlever_arm_m = [{}, {}, {}]\n\n",
+                l[0], l[1], l[2]
+            ));
+        } else if gs_.raw {
+            // Raw observations only: tight coupling on them.
+            s.push_str(&format!(
+                "[gnss]\nfile = \"obs.rnx\"\nformat = \"rinex\"\nnav = \"nav.rnx\"\ncoupling = \"tight\"\n\
+                 range_rate = \"tdcp\"\nlever_arm_m = [{}, {}, {}]\n\n",
                 l[0], l[1], l[2]
             ));
         }
