@@ -144,44 +144,23 @@ fn cut_scenario(path: &Path, text: &str, duration_s: f64) -> Result<Scenario> {
     Err(last_err.unwrap()).context(format!("cannot cut {} to {duration_s} s", path.display()))
 }
 
-/// `text` without its `[gnss]` and `[gnss.*]` tables (whatever the simulator chose
-/// for these files: loose on gnss.txt, or its own tight settings).
-fn without_gnss_tables(text: &str) -> String {
-    let mut out = String::with_capacity(text.len());
-    let mut in_gnss = false;
-    for line in text.split_inclusive('\n') {
-        let l = line.trim();
-        if l.starts_with('[') {
-            let name = l.trim_start_matches('[');
-            in_gnss = name.starts_with("gnss]") || name.starts_with("gnss.");
-        }
-        if !in_gnss {
-            out.push_str(line);
-        }
-    }
-    out
-}
-
-/// The simulator's run.toml with its GNSS section replaced: tight coupling on obs.rnx /
-/// nav.rnx with TDCP range rates, the scenario's elevation mask and antenna lever arm.
-fn tight_config(sc: &Scenario, dir: &Path) -> Result<RunConfig> {
-    let g = sc.file.gnss.as_ref().context(
-        "the scenario has no [gnss] section: tight coupling needs raw GNSS (obs.rnx, nav.rnx)",
-    )?;
-    if !g.raw {
-        bail!("the scenario sets [gnss] raw = false: tight coupling needs obs.rnx and nav.rnx");
-    }
-    let base = std::fs::read_to_string(dir.join("run.toml"))
-        .with_context(|| format!("{}: cannot read", dir.join("run.toml").display()))?;
-    let base = without_gnss_tables(&base);
-    let l = g.antenna_lever_arm_m;
-    let text = format!(
-        "{base}\n# navfuse bench --tight: tight coupling, pseudoranges + TDCP\n[gnss]\nfile = \"obs.rnx\"\nformat = \"rinex\"\nnav = \"nav.rnx\"\ncoupling = \"tight\"\nrange_rate = \"tdcp\"\nelevation_mask_deg = {}\nlever_arm_m = [{}, {}, {}]\n",
-        g.elevation_mask_deg, l[0], l[1], l[2]
+/// The simulator's run.toml: for a scenario with raw GNSS and no receiver fixes it is
+/// tight coupling (pseudoranges + TDCP) on obs.rnx / nav.rnx with the scenario's
+/// elevation mask and antenna lever arm.
+fn tight_config(dir: &Path) -> Result<RunConfig> {
+    let p = dir.join("run.toml");
+    let cfg = navfuse_io::config::load(&p).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let tight = matches!(
+        cfg.gnss.as_ref().map(|g| &g.format),
+        Some(GnssFormat::Rinex(r)) if r.coupling == Coupling::Tight
     );
-    let p = dir.join("run_tight.toml");
-    std::fs::write(&p, text).with_context(|| format!("{}: cannot write", p.display()))?;
-    navfuse_io::config::load(&p).map_err(|e| anyhow::anyhow!("{e}"))
+    if !tight {
+        bail!(
+            "{}: not a tight-coupling run; the bench scenario needs [gnss] raw = true and no [gnss.fix]",
+            p.display()
+        );
+    }
+    Ok(cfg)
 }
 
 pub fn main(
@@ -212,7 +191,7 @@ pub fn main(
     let t_sim = Instant::now();
     let sim = generate(&sc, &sim_dir).map_err(|e| anyhow::anyhow!("{e}"))?;
     let sim_s = t_sim.elapsed().as_secs_f64();
-    let cfg = tight_config(&sc, &sim_dir)?;
+    let cfg = tight_config(&sim_dir)?;
     let obs = navfuse_io::rinex_obs::read_rinex_obs(&sim_dir.join("obs.rnx"))
         .map_err(|e| anyhow::anyhow!("{e}"))?;
     let in_file = Counts::of(obs.iter().map(|e| e.sats.len()));

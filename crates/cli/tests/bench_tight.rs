@@ -4,7 +4,7 @@
 //! the benchmark measures what it says.
 
 mod common;
-use common::{navfuse_ok, repo, tmp};
+use common::{navfuse_ok, repo, simulate, tmp};
 use serde_json::Value;
 use std::process::Command;
 
@@ -23,13 +23,7 @@ fn bench_scenario_has_10_satellites_in_every_epoch() {
     let sc = dir.join("sky.toml");
     std::fs::write(&sc, text.replace("\nrate_hz = 200\n", "\nrate_hz = 10\n")).unwrap();
     let out = dir.join("sim");
-    navfuse_ok(&[
-        "sim",
-        sc.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "-q",
-    ]);
+    simulate(&sc, &out);
     let obs = std::fs::read_to_string(out.join("obs.rnx")).unwrap();
     // RINEX 3 epoch lines: "> yyyy mm dd hh mm ss.sssssss  flag nsat".
     let counts: Vec<usize> = obs

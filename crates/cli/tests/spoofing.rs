@@ -7,7 +7,7 @@
 //! open (run them with `--ignored`); what they measure today is in docs/RESULTS.md §8.
 
 mod common;
-use common::{navfuse_ok, tmp};
+use common::{run, simulate, tmp};
 
 const ATTACK_START_S: f64 = 150.0;
 const T0: f64 = 345600.0;
@@ -26,24 +26,12 @@ fn attacked_run(name: &str, seed: u64, event: &str) -> Vec<(f64, String, String)
     let sc = dir.join("scenario.toml");
     std::fs::write(&sc, text).unwrap();
     let sim = dir.join("sim");
-    navfuse_ok(&[
-        "sim",
-        sc.to_str().unwrap(),
-        "--out",
-        sim.to_str().unwrap(),
-        "-q",
-    ]);
-    let mut run = std::fs::read_to_string(sim.join("run.toml")).unwrap();
-    run.push_str("\n[nhc]\nmode = \"always\"\n\n[spoofing]\n");
-    std::fs::write(sim.join("run_monitor.toml"), run).unwrap();
+    simulate(&sc, &sim);
+    let mut cfg_text = std::fs::read_to_string(sim.join("run.toml")).unwrap();
+    cfg_text.push_str("\n[nhc]\nmode = \"always\"\n\n[spoofing]\n");
+    std::fs::write(sim.join("run_monitor.toml"), cfg_text).unwrap();
     let out = dir.join("out");
-    navfuse_ok(&[
-        "run",
-        sim.join("run_monitor.toml").to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "-q",
-    ]);
+    run(&sim.join("run_monitor.toml"), &out);
     let csv = std::fs::read_to_string(out.join("integrity.csv")).unwrap();
     let _ = std::fs::remove_dir_all(&dir);
     csv.lines()

@@ -2,7 +2,7 @@
 //! seed 000's simulated UAV experiment (`navfuse reproduce seed000`).
 
 mod common;
-use common::{navfuse_ok, shared, tmp};
+use common::{navfuse_ok, run, shared, simulate, tmp};
 use nalgebra::Vector3;
 use navfuse_core::earth::lla_diff_ned;
 use navfuse_io::nav::read_nav;
@@ -25,13 +25,7 @@ fn num(v: &Value) -> f64 {
 fn walk_tight_beats_spp() {
     let Some(d) = shared() else { return };
     let out = tmp("walk_tight");
-    navfuse_ok(&[
-        "run",
-        "examples/walk_0827_tight.toml",
-        "--out",
-        out.to_str().unwrap(),
-        "-q",
-    ]);
+    run(Path::new("examples/walk_0827_tight.toml"), &out);
     let pos = d.join("rtklibexplorer/walk_0827/gnss_1730_sf.pos");
     let e: Value = serde_json::from_str(&navfuse_ok(&[
         "eval",
@@ -98,13 +92,7 @@ fn errors_ned(sol: &Path, truth: &Path, t0: f64, t1: f64) -> Vec<(f64, Vector3<f
 #[test]
 fn blockage_2sat_tight_drifts_3x_less_than_loose() {
     let dir = tmp("blockage");
-    navfuse_ok(&[
-        "sim",
-        "scenarios/blockage_2sat.toml",
-        "--out",
-        dir.to_str().unwrap(),
-        "-q",
-    ]);
+    simulate(Path::new("scenarios/blockage_2sat.toml"), &dir);
     let base = std::fs::read_to_string(dir.join("run.toml")).unwrap();
     assert!(base.contains("coupling = \"tight\""), "{base}");
     let t_start = 345600.0;
@@ -123,13 +111,7 @@ fn blockage_2sat_tight_drifts_3x_less_than_loose() {
             let cfg = dir.join(format!("{name}.toml"));
             std::fs::write(&cfg, text).unwrap();
             let out = dir.join(&name);
-            navfuse_ok(&[
-                "run",
-                cfg.to_str().unwrap(),
-                "--out",
-                out.to_str().unwrap(),
-                "-q",
-            ]);
+            run(&cfg, &out);
             let e = errors_ned(&out.join("solution.nav"), &dir.join("truth.nav"), b0, b1);
             assert_eq!(e.len(), 61, "{name}: epochs in the blockage");
             let d = e

@@ -13,7 +13,7 @@
 
 use crate::aiding::heading::HeadingAxis;
 use crate::aiding::tdcp::{Interval, TdcpPrevious};
-use crate::aiding::{Aiding, AidingContext, ReceiverClock, VehicleEstimate};
+use crate::aiding::{Aiding, AidingContext, Linearized, ReceiverClock, VehicleEstimate};
 use crate::alignment;
 use crate::attitude::{
     c_bn_from_euler, euler_from_c_bn, euler_from_q_bn, q_bn_from_euler, quat_from_rotvec,
@@ -231,6 +231,26 @@ struct TightState {
 /// Chi-square gate for `dof` rows at tail probability `p`.
 fn chi2_gate(dof: usize, p: Option<f64>) -> Option<f64> {
     p.map(|p| chi2_threshold(dof, p))
+}
+
+/// Measurements stacked into one (rows in order, block-diagonal R); None if empty.
+fn stack_rows(lins: &[&Linearized], n_states: usize) -> Option<Linearized> {
+    let m: usize = lins.iter().map(|l| l.y.len()).sum();
+    if m == 0 {
+        return None;
+    }
+    let mut y = DVector::zeros(m);
+    let mut h = DMatrix::zeros(m, n_states);
+    let mut r = DMatrix::zeros(m, m);
+    let mut k = 0;
+    for l in lins {
+        let d = l.y.len();
+        y.rows_mut(k, d).copy_from(&l.y);
+        h.rows_mut(k, d).copy_from(&l.h);
+        r.view_mut((k, k), (d, d)).copy_from(&l.r);
+        k += d;
+    }
+    Some(Linearized { y, h, r })
 }
 
 impl Navigator {
@@ -889,27 +909,9 @@ impl Navigator {
     ) -> bool {
         self.flush_covariance();
         let ctx = self.context(self.tight.clock);
-        let stack = |list: &[Aiding]| -> Option<crate::aiding::Linearized> {
-            let lins: Vec<_> = list.iter().filter_map(|a| a.linearize(&ctx)).collect();
-            let m: usize = lins.iter().map(|l| l.y.len()).sum();
-            if m == 0 {
-                return None;
-            }
-            let n = ctx.layout.len();
-            let (mut y, mut h, mut r) = (
-                DVector::zeros(m),
-                DMatrix::zeros(m, n),
-                DMatrix::zeros(m, m),
-            );
-            let mut k = 0;
-            for l in &lins {
-                let d = l.y.len();
-                y.rows_mut(k, d).copy_from(&l.y);
-                h.rows_mut(k, d).copy_from(&l.h);
-                r.view_mut((k, k), (d, d)).copy_from(&l.r);
-                k += d;
-            }
-            Some(crate::aiding::Linearized { y, h, r })
+        let stack = |list: &[Aiding]| {
+            let lins: Vec<Linearized> = list.iter().filter_map(|a| a.linearize(&ctx)).collect();
+            stack_rows(&lins.iter().collect::<Vec<_>>(), ctx.layout.len())
         };
         let dist_lin = distance_row.and_then(|a| stack(&[a]));
         let Some(lin) = stack(nis_rows) else {
@@ -948,23 +950,17 @@ impl Navigator {
         mut rejected: impl FnMut(&Aiding, f64, f64),
     ) -> bool {
         self.flush_covariance();
-        let mut keep: Vec<(Aiding, crate::aiding::Linearized)> = {
+        let mut keep: Vec<(Aiding, Linearized)> = {
             let ctx = self.context(self.tight.clock);
             rows.iter()
                 .filter_map(|a| a.linearize(&ctx).map(|lin| (*a, lin)))
                 .collect()
         };
         while !keep.is_empty() {
-            let n = self.layout.len();
-            let m = keep.len();
-            let mut y = DVector::zeros(m);
-            let mut h = DMatrix::zeros(m, n);
-            let mut r = DMatrix::zeros(m, m);
-            for (i, (_, lin)) in keep.iter().enumerate() {
-                y[i] = lin.y[0];
-                h.row_mut(i).copy_from(&lin.h.row(0));
-                r[(i, i)] = lin.r[(0, 0)];
-            }
+            let lins: Vec<&Linearized> = keep.iter().map(|(_, lin)| lin).collect();
+            let Some(Linearized { y, h, r }) = stack_rows(&lins, self.layout.len()) else {
+                break;
+            };
             let Some(tests) = self.filter.blunder_test(&y, &h, &r) else {
                 break;
             };

@@ -100,11 +100,15 @@ impl Eskf {
         UpdateOutcome::Applied { dx, nis }
     }
 
+    /// Innovation covariance S = H P H^T + R.
+    fn innovation_cov(&self, h: &DMatrix<f64>, r: &DMatrix<f64>) -> DMatrix<f64> {
+        h * &self.p * h.transpose() + r
+    }
+
     /// Normalised innovation squared y^T S^-1 y with S = H P H^T + R, without
     /// updating; None when S is singular.
     pub fn nis(&self, y: &DVector<f64>, h: &DMatrix<f64>, r: &DMatrix<f64>) -> Option<f64> {
-        let s = h * &self.p * h.transpose() + r;
-        let v = y.dot(&s.cholesky()?.solve(y));
+        let v = y.dot(&self.innovation_cov(h, r).cholesky()?.solve(y));
         v.is_finite().then_some(v)
     }
 
@@ -120,8 +124,7 @@ impl Eskf {
         h: &DMatrix<f64>,
         r: &DMatrix<f64>,
     ) -> Option<Vec<(f64, f64)>> {
-        let s = h * &self.p * h.transpose() + r;
-        let s_inv = s.cholesky()?.inverse();
+        let s_inv = self.innovation_cov(h, r).cholesky()?.inverse();
         let g = &s_inv * y;
         (0..y.len())
             .map(|i| {

@@ -1435,13 +1435,14 @@ fn gate(key: &str, g: Option<Gate>, default: Option<f64>) -> KResult<Option<f64>
     match g {
         None => Ok(default),
         Some(Gate::Off) => Ok(None),
-        Some(Gate::Probability(p)) if (1e-15..0.5).contains(&p) => Ok(Some(p)),
-        Some(Gate::Probability(p)) => Err(kerr(
-            key,
-            format!(
-                "expected a probability in [1e-15, 0.5), e.g. 1e-4, or false for no test, got {p}"
-            ),
-        )),
+        Some(Gate::Probability(p)) => probability(key, p)
+            .map(Some)
+            .map_err(|_| {
+                kerr(
+                    key,
+                    format!("expected a probability in [1e-15, 0.5), e.g. 1e-4, or false for no test, got {p}"),
+                )
+            }),
     }
 }
 

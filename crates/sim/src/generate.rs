@@ -666,8 +666,8 @@ fn write_run_config(sc: &Scenario, dir: &Path, files: &mut Vec<String>) -> Resul
             // Raw observations only: tight coupling on them.
             s.push_str(&format!(
                 "[gnss]\nfile = \"obs.rnx\"\nformat = \"rinex\"\nnav = \"nav.rnx\"\ncoupling = \"tight\"\n\
-                 range_rate = \"tdcp\"\nlever_arm_m = [{}, {}, {}]\n\n",
-                l[0], l[1], l[2]
+                 range_rate = \"tdcp\"\nelevation_mask_deg = {}\nlever_arm_m = [{}, {}, {}]\n\n",
+                gs_.elevation_mask_deg, l[0], l[1], l[2]
             ));
         }
         if let Some(h) = &gs_.heading {

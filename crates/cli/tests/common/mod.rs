@@ -45,3 +45,26 @@ pub fn navfuse_ok(args: &[&str]) -> String {
     );
     String::from_utf8_lossy(&out.stdout).into_owned()
 }
+
+/// `navfuse sim SCENARIO --out OUT -q` (scenario relative to the repository root or
+/// absolute).
+pub fn simulate(scenario: &Path, out: &Path) {
+    navfuse_ok(&[
+        "sim",
+        scenario.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "-q",
+    ]);
+}
+
+/// `navfuse run CONFIG --out OUT -q`.
+pub fn run(config: &Path, out: &Path) {
+    navfuse_ok(&[
+        "run",
+        config.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "-q",
+    ]);
+}
