@@ -110,12 +110,17 @@ enum Command {
         #[arg(long, short)]
         quiet: bool,
     },
-    /// Reproduce a paper's experiment on the simulator (SYSTEM.md §7): seed001 (heading
-    /// from GNSS), seed002 (NHC with GNSS outages), seed004 (INS + odometer, no GNSS).
+    /// Reproduce a paper's experiment on the simulator (SYSTEM.md §7): seed000 (tight
+    /// coupling, DGPS), seed001 (heading from GNSS), seed002 (NHC with GNSS outages),
+    /// seed004 (INS + odometer, no GNSS; with --attack, spoofing detection).
     ///
     /// Simulates the experiment's scenario for each seed, runs every navigator variant
     /// on the same data, scores it against the truth and prints mean [min, max] over the
     /// seeds beside the paper's figures, with the improvement (seed 002 eq. 18).
+    ///
+    /// seed004 only: --attack, --jump-runs and --clean-hours replace the plain
+    /// experiment by the spoofing ones (any combination; each is printed in turn, or
+    /// together under --json). Their runs use two threads.
     Reproduce {
         /// Experiment: seed000, seed001, seed002 or seed004.
         experiment: String,
@@ -135,6 +140,32 @@ enum Command {
         /// No per-run progress lines on stderr.
         #[arg(long, short)]
         quiet: bool,
+        /// seed004: the spoofing experiment (SYSTEM.md §5): scenarios/seed004_attack.toml
+        /// (built in; two laps of the loop, drift attack at 2 m/s from 150 s to 450 s)
+        /// with the variants no_monitor, monitor ([spoofing] defaults), monitor_R
+        /// (distance R = 10 m alone); seed 004's own system (6-state fusion, GNSS tested
+        /// against the free dead reckoning): odo_dr_R (INS/odometer/NHC, R alone),
+        /// ins_only_R (INS only, R alone), ins_only_chi2 (INS only, chi-square alone);
+        /// dead_reckoning (GNSS removed over the attack), six_state_monitor (6-state
+        /// fusion + defaults against its prediction); prints alarms
+        /// before the attack, detection delay and detector, maximum horizontal and 3D
+        /// errors during the attack and in the 60 s after it, and the 3D RMSE, over
+        /// --seeds seeds, beside the paper's statements.
+        #[arg(long)]
+        attack: bool,
+        /// seed004: N jump attacks on scenarios/seed004_loop.toml (one lap) with the
+        /// `monitor` variant: random seed, direction uniform on the sphere, 20-200 m,
+        /// start uniform in [70, 330] s while moving, 30 s long, drawn from
+        /// --first-seed; prints the fraction detected within 1 s of the attack start,
+        /// the delays, detectors and alarms before the attack.
+        #[arg(long, value_name = "N", default_value_t = 0)]
+        jump_runs: usize,
+        /// seed004: false alarms over H hours of clean driving (1-hour drives of the
+        /// loop with a stop each lap, seeds from --first-seed): ADIS16405 MEMS IMU at
+        /// 50 Hz + odometer + NHC + GNSS, [spoofing] defaults; transitions out of
+        /// trusted and entries to spoofed, per 10 h.
+        #[arg(long, value_name = "H", default_value_t = 0.0)]
+        clean_hours: f64,
     },
     /// Measure speed and memory: the core filter loop without I/O (samples/s) and a full
     /// run writing KF-GINS's three output files (wall time, peak memory); with --tight,
@@ -206,7 +237,21 @@ fn main() -> ExitCode {
             json,
             keep,
             quiet,
-        } => reproduce_cmd::main(&experiment, seeds, first_seed, json, keep, quiet),
+            attack,
+            jump_runs,
+            clean_hours,
+        } => {
+            if attack || jump_runs > 0 || clean_hours != 0.0 {
+                let req = reproduce_cmd::attack::AttackRequest {
+                    attack,
+                    jump_runs,
+                    clean_hours,
+                };
+                reproduce_cmd::attack::main(&experiment, req, seeds, first_seed, json, keep, quiet)
+            } else {
+                reproduce_cmd::main(&experiment, seeds, first_seed, json, keep, quiet)
+            }
+        }
         Command::Bench {
             kf_gins,
             tight,

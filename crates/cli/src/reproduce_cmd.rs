@@ -22,6 +22,10 @@ use serde_json::{json, Value};
 use crate::eval_cmd::load_nav;
 use crate::run_cmd::run_job;
 
+/// `reproduce seed004 --attack / --jump-runs / --clean-hours` (spoofing, issue 6).
+#[path = "reproduce_attack.rs"]
+pub mod attack;
+
 /// One navigator configuration of an experiment.
 struct Variant {
     name: &'static str,
@@ -741,8 +745,14 @@ fn to_text(ex: &Experiment, r: &Results) -> String {
     for &m in ex.metrics {
         s.push_str(&format!("{m:<24}"));
         for v in &ex.variants {
-            let (mean, lo, hi) = spread(&values(r, v.name, m));
-            s.push_str(&format!("{:>26}", format!("{mean:.3} [{lo:.3}, {hi:.3}]")));
+            let xs = values(r, v.name, m);
+            let cell = if xs.is_empty() {
+                "n/a".to_string()
+            } else {
+                let (mean, lo, hi) = spread(&xs);
+                format!("{mean:.3} [{lo:.3}, {hi:.3}]")
+            };
+            s.push_str(&format!("{cell:>26}"));
         }
         let paper: Vec<String> = ex
             .paper

@@ -70,6 +70,7 @@ pub struct JobResult {
     pub summary: RunSummary,
     pub wall: Duration,
     pub files: Vec<PathBuf>,
+    /// GNSS epochs read: fixes (loose) or raw epochs (tight).
     pub gnss_fixes: usize,
     /// Odometer samples and heading records read (0 when not configured).
     pub odometer_samples: usize,
@@ -241,6 +242,8 @@ pub fn run_job(mut cfg: RunConfig, out_dir: &Path, progress: bool) -> Result<Job
     }
     let week = imu_week.or(gnss_week).unwrap_or(0);
     let last_gnss_t = raw.last().map(|e| e.t).or(fixes.last().map(|f| f.t));
+    // GNSS epochs offered to the navigator: fixes, or raw epochs (tight coupling).
+    let gnss_epochs = fixes.len() + raw.len();
     let measurements = navfuse_core::merge_raw_epochs(
         navfuse_core::merge_measurements(&fixes, &odometer, &heading),
         raw,
@@ -510,7 +513,7 @@ pub fn run_job(mut cfg: RunConfig, out_dir: &Path, progress: bool) -> Result<Job
         summary,
         wall: t_wall.elapsed(),
         files,
-        gnss_fixes: fixes.len(),
+        gnss_fixes: gnss_epochs,
         odometer_samples: odometer.len(),
         heading_records: heading.len(),
         time_offset: time_offset_pass1,

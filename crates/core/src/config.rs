@@ -111,6 +111,23 @@ pub struct GnssOptions {
     pub gate_timeout_s: f64,
     /// Withheld epochs.
     pub outages: OutageSchedule,
+    /// How loosely coupled fixes are fused (error-state filter or six-state cascade).
+    pub fusion: GnssFusion,
+}
+
+/// How loosely coupled GNSS fixes are fused.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum GnssFusion {
+    /// Each fix aids the error-state filter (SYSTEM.md §3a).
+    #[default]
+    ErrorState,
+    /// SYSTEM.md §5; seed 004 §3: the error-state filter dead-reckons without GNSS
+    /// (IMU + odometer + NHC + ZUPT as configured; the start may still take its
+    /// position from the first fix), and every `every`-th fix updates a 6-state KF
+    /// X = [r^n, v^n], H = I_6, driven by the dead-reckoning increments
+    /// (six_state.rs). The solution's position and velocity are that filter's, the
+    /// attitude the dead reckoning's. Loose coupling only.
+    SixState { every: std::num::NonZeroU32 },
 }
 
 /// Which range rate tight coupling fuses with the pseudoranges (SYSTEM.md §3b).

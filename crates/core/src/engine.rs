@@ -18,12 +18,15 @@ use crate::alignment;
 use crate::attitude::{
     c_bn_from_euler, euler_from_c_bn, euler_from_q_bn, q_bn_from_euler, quat_from_rotvec,
 };
-use crate::config::{AttitudeInit, NavConfig, NhcMode, RangeRate};
+use crate::config::{AttitudeInit, GnssFusion, NavConfig, NhcMode, RangeRate};
 use crate::earth::{c_ne, lla_add_ned, lla_diff_ned, lla_to_ecef};
 use crate::error_model::{fill_f, fill_qc, Discretizer, MeanMotion};
 use crate::filter::{chi2_threshold, Eskf, UpdateOutcome};
-use crate::integrity::{EpochCheck, IntegrityMonitor, IntegrityState, Transition};
+use crate::integrity::{
+    EpochCheck, IntegrityMonitor, IntegrityReference, IntegrityState, StepInput, Transition,
+};
 use crate::mechanization::Mechanizer;
+use crate::six_state::{ImuFix, SixState, SixStateOutcome};
 use crate::state::{Block, StateLayout, ATT, BA, BG, N_INS, POS, SA, SG, VEL};
 use crate::static_detect::StaticDetector;
 use crate::types::{
@@ -206,6 +209,16 @@ pub struct Navigator {
     tight: TightState,
     /// GNSS integrity monitor (spoofing), when enabled.
     monitor: Option<IntegrityMonitor>,
+    /// `GnssFusion::SixState`: the six-state filter that takes the fixes (SYSTEM.md
+    /// §5; six_state.rs) and the output solution built from it; the error-state
+    /// filter above is then a dead-reckoning navigator.
+    six_state: Option<SixState>,
+    six_state_out: NavState,
+    /// Sum of the position corrections made by GNSS updates, NED [m] (the monitor
+    /// removes them from its reference).
+    gnss_correction_ned_m: Vector3<f64>,
+    /// A GNSS update is being fused (its feedback goes to `gnss_correction_ned_m`).
+    in_gnss_update: bool,
     summary: RunSummary,
 }
 
@@ -368,6 +381,10 @@ impl Navigator {
                 .integrity
                 .enabled
                 .then(|| IntegrityMonitor::new(cfg.integrity.clone())),
+            six_state: new_six_state(cfg, &nav, &DMatrix::from_diagonal(&p0)),
+            six_state_out: nav,
+            gnss_correction_ned_m: Vector3::zeros(),
+            in_gnss_update: false,
             summary: RunSummary {
                 first_t: t0,
                 last_t: t0,
@@ -376,7 +393,19 @@ impl Navigator {
         }
     }
 
+    /// The solution: the navigation state, or with `GnssFusion::SixState` the
+    /// six-state filter's position and velocity with the dead reckoning's attitude.
     pub fn nav(&self) -> &NavState {
+        if self.six_state.is_some() {
+            &self.six_state_out
+        } else {
+            &self.nav
+        }
+    }
+
+    /// The error-state filter's own navigation state (with `GnssFusion::SixState`
+    /// the dead reckoning without GNSS; otherwise the same as [`Navigator::nav`]).
+    pub fn dr_nav(&self) -> &NavState {
         &self.nav
     }
 
@@ -422,6 +451,11 @@ impl Navigator {
         for (i, v) in s.iter_mut().enumerate() {
             *v = self.filter.std(i);
         }
+        if let Some(six) = &self.six_state {
+            let s6 = six.std_now(&self.filter.p);
+            s[POS..POS + 3].copy_from_slice(&s6[..3]);
+            s[VEL..VEL + 3].copy_from_slice(&s6[3..]);
+        }
         s
     }
 
@@ -461,6 +495,16 @@ impl Navigator {
         self.acc.dvel += s.dvel;
         if self.acc.dt >= self.cfg.filter.covariance_period_s - 1e-9 {
             self.flush_covariance();
+        }
+        self.six_state_follow_dr();
+    }
+
+    /// `GnssFusion::SixState`: move the six-state filter by the dead reckoning's
+    /// increments since the last call and refresh the output solution.
+    fn six_state_follow_dr(&mut self) {
+        if let Some(six) = self.six_state.as_mut() {
+            six.follow_dr(&self.nav);
+            self.six_state_out = six.solution(&self.nav);
         }
     }
 
@@ -503,6 +547,10 @@ impl Navigator {
         );
         self.disc.discretize(a.dt);
         self.filter.predict(&self.disc.phi, &self.disc.qd);
+        if let Some(six) = self.six_state.as_mut() {
+            // The six-state process noise follows the DR errors (six_state.rs).
+            six.on_dr_predict(&self.disc.phi);
+        }
         self.acc = Accum::default();
     }
 
@@ -520,8 +568,17 @@ impl Navigator {
             Aiding::GnssPosition(_) | Aiding::GnssVelocity(_) | Aiding::Heading(..)
         );
         let name = aiding.name();
+        // GnssFusion::SixState: the gain carries the DR error correlation through
+        // the update (six_state.rs process noise).
+        let gain = match self.six_state {
+            Some(_) => self.filter.gain(&lin.h, &lin.r),
+            None => None,
+        };
         match self.filter.update(&lin.y, &lin.h, &lin.r, gate) {
             UpdateOutcome::Applied { dx, .. } => {
+                if let (Some(six), Some(k)) = (self.six_state.as_mut(), gain) {
+                    six.on_dr_update(&k, &lin.h);
+                }
                 self.feedback(&dx);
                 *self.summary.aiding_used.entry(name).or_default() += 1;
                 Fused::Applied
@@ -570,6 +627,9 @@ impl Navigator {
         let old_lla = self.nav.lla;
         self.nav.lla = lla_add_ned(&self.nav.lla, &(-d_pos));
         self.nav.v_n -= d_vel;
+        if self.in_gnss_update {
+            self.gnss_correction_ned_m -= d_pos;
+        }
         // C_true = (I + phi x) C_est.
         self.nav.q_bn = quat_from_rotvec(&phi) * self.nav.q_bn;
         self.mech
@@ -602,6 +662,8 @@ impl Navigator {
         }
         // TDCP: the displacement since the previous epoch is the mechanization's only.
         self.tight.last_imu_ecef_m = lla_to_ecef(&self.nav.lla);
+        // The dead reckoning's own corrections are part of its increments.
+        self.six_state_follow_dr();
     }
 
     /// Current GNSS-IMU time offset rate [s/s].
@@ -612,6 +674,7 @@ impl Navigator {
     /// Fuse one time-tagged input (already reached in time).
     pub fn apply(&mut self, m: &Measurement) {
         match m {
+            Measurement::Gnss(fix) if self.six_state.is_some() => self.update_six_state(fix),
             Measurement::Gnss(fix) => self.update_gnss(fix),
             Measurement::GnssRaw(epoch) => self.update_tight(epoch),
             Measurement::Odometer(o) => {
@@ -650,6 +713,12 @@ impl Navigator {
     /// Loosely coupled GNSS update: position, then velocity if present and enabled,
     /// then the course over ground as heading when configured.
     pub fn update_gnss(&mut self, fix: &GnssFix) {
+        self.in_gnss_update = true;
+        self.update_gnss_fix(fix);
+        self.in_gnss_update = false;
+    }
+
+    fn update_gnss_fix(&mut self, fix: &GnssFix) {
         if fix
             .vel_ned
             .is_some_and(|v| v.norm() > self.cfg.zupt.max_speed_mps)
@@ -669,8 +738,13 @@ impl Navigator {
         if self.monitor.is_some() {
             // The monitor replaces the gate (and its timeout, which would re-admit a
             // spoofer): it tests the fix against the INS/odometer prediction.
+            // Position and (when fused) velocity jointly against the prediction.
             let pos = Aiding::GnssPosition(&f);
-            if !self.integrity_check(fix.t, &[pos], Some(pos)) {
+            let mut rows = vec![pos];
+            if use_vel && f.vel_ned.is_some() {
+                rows.push(Aiding::GnssVelocity(&f));
+            }
+            if !self.integrity_check(fix.t, &rows, Some(pos), 0.0) {
                 self.summary.gnss_rejected += 1;
                 return;
             }
@@ -708,10 +782,139 @@ impl Navigator {
         self.prev_fix = Some(f);
     }
 
+    /// `GnssFusion::SixState` (SYSTEM.md §5; seed 004 §3): the fix goes to the
+    /// six-state filter, never to the error-state filter, which dead-reckons. Every
+    /// N-th fix is fused (the others are neither used nor counted as rejected), moved
+    /// to the IMU centre with the dead reckoning's attitude, position and (when
+    /// `use_velocity`) velocity, with the std overrides and the innovation gate and
+    /// its timeout of `[gnss]`.
+    fn update_six_state(&mut self, fix: &GnssFix) {
+        if fix
+            .vel_ned
+            .is_some_and(|v| v.norm() > self.cfg.zupt.max_speed_mps)
+        {
+            // The ZUPT motion veto only; nothing is fused into the dead reckoning.
+            self.gnss_moving_t = fix.t;
+        }
+        let g = &self.cfg.gnss;
+        let mut f = *fix;
+        if let Some(s) = g.position_std_override {
+            f.std_ned = s;
+        }
+        if let (Some(s), true) = (g.velocity_std_override, f.vel_ned.is_some()) {
+            f.vel_std_ned = Some(s);
+        }
+        if !g.use_velocity {
+            f.vel_ned = None;
+            f.vel_std_ned = None;
+        }
+        let (lever_arm_b, gate_p, timeout_s) =
+            (g.lever_arm_b, g.gate_probability, g.gate_timeout_s);
+        // Bring the six-state covariance and state to the fix time.
+        self.flush_covariance();
+        self.six_state_follow_dr();
+        let c_bn = self.nav.q_bn.to_rotation_matrix().into_inner();
+        let imu_fix = ImuFix::from_antenna(&f, &c_bn, &self.w_ib_b, &lever_arm_b, &self.nav.v_n);
+        self.prev_fix = Some(f);
+        let Some(six) = self.six_state.as_mut() else {
+            return;
+        };
+        if !six.next_epoch_due() {
+            six.update(&imu_fix, None);
+            return;
+        }
+        let dr_increment_var_ned_m2 = six.predict_covariance_from_dr(&self.filter.p);
+        if self.monitor.is_some() {
+            // The fix against the six-state prediction, or against the dead reckoning
+            // itself (seed 004's r_INS/OD, which GNSS never corrects): distance and
+            // 3-dof NIS. The displacement window is against the dead reckoning.
+            let (y, s_mat) = match self.cfg.integrity.reference {
+                IntegrityReference::Prediction => six.position_innovation(&imu_fix),
+                IntegrityReference::DeadReckoning => {
+                    let p_rr = self.filter.p.fixed_view::<3, 3>(POS, POS).into_owned();
+                    let r = Matrix3::from_diagonal(&imu_fix.pos_std_ned_m.map(|x| x * x));
+                    (lla_diff_ned(&imu_fix.lla, &self.nav.lla), p_rr + r)
+                }
+            };
+            let nis = s_mat.cholesky().map_or(f64::NAN, |c| y.dot(&c.solve(&y)));
+            let check = EpochCheck {
+                t: fix.t,
+                distance_m: y.xy().norm(),
+                nis,
+                dof: 3,
+                distance_floor_m: 0.0,
+                ref_pos_std_m: (s_mat.trace() - imu_fix.pos_std_ned_m.map(|x| x * x).sum())
+                    .max(0.0)
+                    .sqrt(),
+                step: Some(StepInput {
+                    innovation_ned_m: lla_diff_ned(&self.nav.lla, &imu_fix.lla),
+                    fix_std_ned_m: imu_fix.pos_std_ned_m,
+                    vel_std_ned_mps: Vector3::from_fn(|k, _| self.filter.std(VEL + k)),
+                    gnss_correction_ned_m: Vector3::zeros(),
+                    ref_increment_var_ned_m2: dr_increment_var_ned_m2,
+                }),
+            };
+            if !self.monitor_verdict(&check) {
+                self.summary.gnss_rejected += 1;
+                return;
+            }
+        }
+        let Some(six) = self.six_state.as_mut() else {
+            return;
+        };
+        // The monitor, when on, replaces the gate and its timeout.
+        let mut gate = chi2_gate(imu_fix.dof(), gate_p).filter(|_| self.monitor.is_none());
+        if let (Some(t0), Some(_)) = (self.reject_streak_since, gate) {
+            if fix.t - t0 >= timeout_s {
+                gate = None;
+                self.summary.events.push(Event::GateBypassed {
+                    t: fix.t,
+                    streak_s: fix.t - t0,
+                });
+            }
+        }
+        let outcome = six.update(&imu_fix, gate);
+        self.six_state_out = six.solution(&self.nav);
+        const SOURCE: &str = "gnss_six_state";
+        match outcome {
+            SixStateOutcome::Applied { .. } => {
+                self.summary.gnss_used += 1;
+                *self.summary.aiding_used.entry(SOURCE).or_default() += 1;
+                self.reject_streak_since = None;
+            }
+            SixStateOutcome::Rejected { nis, threshold } => {
+                self.summary.gnss_rejected += 1;
+                *self.summary.aiding_rejected.entry(SOURCE).or_default() += 1;
+                self.reject_streak_since.get_or_insert(fix.t);
+                self.summary.events.push(Event::Rejected {
+                    t: fix.t,
+                    source: SOURCE,
+                    nis,
+                    threshold,
+                });
+            }
+            SixStateOutcome::Invalid => {
+                self.summary.gnss_rejected += 1;
+                *self.summary.aiding_rejected.entry(SOURCE).or_default() += 1;
+                self.summary.events.push(Event::Singular {
+                    t: fix.t,
+                    source: SOURCE,
+                });
+            }
+            SixStateOutcome::Skipped => {}
+        }
+    }
+
     /// Tightly coupled update with one receiver epoch (SYSTEM.md §3b): the clock
     /// bias is (re)set when needed, then the range rates (Doppler or TDCP), then the
     /// pseudoranges, each kind tested jointly per satellite and fused as scalar updates.
     pub fn update_tight(&mut self, epoch: &GnssRawEpoch) {
+        self.in_gnss_update = true;
+        self.update_tight_epoch(epoch);
+        self.in_gnss_update = false;
+    }
+
+    fn update_tight_epoch(&mut self, epoch: &GnssRawEpoch) {
         if !self.cfg.tight.enabled {
             return;
         }
@@ -743,7 +946,10 @@ impl Navigator {
                 .filter(|s| s.pseudorange_m.is_some())
                 .map(Aiding::Pseudorange)
                 .collect();
-            if !self.integrity_check(epoch.t, &prs, fix_pos) {
+            // The single point fix is noisier than a receiver's filtered fix: the
+            // distance threshold is at least its 3-sigma.
+            let floor = epoch.fix.as_ref().map_or(0.0, |f| 3.0 * f.std_ned.norm());
+            if !self.integrity_check(epoch.t, &prs, fix_pos, floor) {
                 // Nothing of this epoch is used; carrier differencing restarts.
                 self.tight.prev_t = None;
                 self.summary.gnss_rejected += 1;
@@ -906,6 +1112,7 @@ impl Navigator {
         t: f64,
         nis_rows: &[Aiding],
         distance_row: Option<Aiding>,
+        distance_floor_m: f64,
     ) -> bool {
         self.flush_covariance();
         let ctx = self.context(self.tight.clock);
@@ -918,14 +1125,37 @@ impl Navigator {
             return true;
         };
         let nis = self.filter.nis(&lin.y, &lin.h, &lin.r).unwrap_or(f64::NAN);
+        let vel_std_ned_mps = Vector3::from_fn(|k, _| self.filter.std(VEL + k));
+        let step = dist_lin.as_ref().map(|l| StepInput {
+            innovation_ned_m: Vector3::new(l.y[0], l.y[1], l.y[2]),
+            fix_std_ned_m: Vector3::from_fn(|k, _| l.r[(k, k)].max(0.0).sqrt()),
+            vel_std_ned_mps,
+            gnss_correction_ned_m: self.gnss_correction_ned_m,
+            ref_increment_var_ned_m2: Vector3::zeros(),
+        });
         let check = EpochCheck {
             t,
-            distance_m: dist_lin.map_or(f64::NAN, |l| l.y.norm()),
+            // Horizontal: the fix's vertical error (about twice the horizontal) would
+            // make a 3D R false-alarm; vertical offsets are left to the chi-square test.
+            distance_m: dist_lin
+                .as_ref()
+                .map_or(f64::NAN, |l| l.y.rows(0, 2).norm()),
             nis,
             dof: lin.y.len(),
+            ref_pos_std_m: (0..3)
+                .map(|k| self.filter.std(POS + k).powi(2))
+                .sum::<f64>()
+                .sqrt(),
+            distance_floor_m,
+            step,
         };
+        self.monitor_verdict(&check)
+    }
+
+    /// Feed one epoch to the monitor, log its transition; true if GNSS may be fused.
+    fn monitor_verdict(&mut self, check: &EpochCheck) -> bool {
         let monitor = self.monitor.as_mut().expect("monitor enabled");
-        let v = monitor.check(&check);
+        let v = monitor.check(check);
         if let Some(tr) = v.transition {
             self.summary.events.push(Event::Integrity(tr));
         }
@@ -1104,6 +1334,26 @@ impl Navigator {
             ));
         }
     }
+}
+
+/// The six-state filter for `GnssFusion::SixState` with loose coupling, started at
+/// the dead reckoning's initial state with its position/velocity uncertainty; None
+/// otherwise (and when the start is not finite: `run` reports that).
+fn new_six_state(cfg: &NavConfig, nav: &NavState, p_dr: &DMatrix<f64>) -> Option<SixState> {
+    let GnssFusion::SixState { every } = cfg.gnss.fusion else {
+        return None;
+    };
+    if cfg.tight.enabled {
+        return None;
+    }
+    let ini = &cfg.initial;
+    let mut p0 = nalgebra::Matrix6::zeros();
+    for k in 0..3 {
+        p0[(k, k)] = ini.pos_std[k].powi(2);
+        p0[(3 + k, 3 + k)] = ini.vel_std[k].powi(2);
+    }
+    let mut six = SixState::new(nav, p0, every).ok()?;
+    six.track_dr_covariance(p_dr).then_some(six)
 }
 
 /// Median of the values (reordered), None when empty.
@@ -1329,6 +1579,12 @@ pub fn run<E: From<NavError>>(
     mut on_output: impl FnMut(&Navigator) -> Result<(), E>,
     mut on_progress: impl FnMut(f64),
 ) -> Result<RunSummary, E> {
+    if matches!(cfg.gnss.fusion, GnssFusion::SixState { .. }) && cfg.tight.enabled {
+        return Err(NavError(
+            "gnss fusion \"six_state\" fuses GNSS fixes (loose coupling) only; it cannot be used with tight coupling".into(),
+        )
+        .into());
+    }
     let end = cfg.end_time.unwrap_or(f64::INFINITY);
     let mut imu = imu.filter(|r| r.as_ref().map_or(true, |s| s.t >= cfg.start_time));
     let first = match imu.next() {
@@ -1408,6 +1664,13 @@ pub fn run<E: From<NavError>>(
         }
     };
     let mut n = Navigator::with_velocity(cfg, start.t0, start.lla, start.rpy, start.v_n);
+    if matches!(cfg.gnss.fusion, GnssFusion::SixState { .. }) && n.six_state.is_none() {
+        return Err(NavError(format!(
+            "six-state fusion: the initial position, velocity or their standard deviations are not finite (start at t = {:.3})",
+            start.t0
+        ))
+        .into());
+    }
     n.summary.events.push(Event::Aligned {
         t: start.t0,
         method: start.method,
@@ -1565,6 +1828,7 @@ mod tests {
                 gate_probability: None,
                 gate_timeout_s: DEFAULT_GATE_TIMEOUT_S,
                 outages: OutageSchedule::default(),
+                fusion: GnssFusion::ErrorState,
             },
             filter: FilterOptions {
                 covariance_period_s: 0.0,

@@ -100,6 +100,15 @@ impl Eskf {
         UpdateOutcome::Applied { dx, nis }
     }
 
+    /// Kalman gain K = P H^T (H P H^T + R)^-1 of a measurement, without updating
+    /// (e.g. to carry a cross-covariance through the update, six_state.rs); None
+    /// when S is singular.
+    pub fn gain(&self, h: &DMatrix<f64>, r: &DMatrix<f64>) -> Option<DMatrix<f64>> {
+        let ph_t = &self.p * h.transpose();
+        let chol = (h * &ph_t + r).cholesky()?;
+        Some(chol.solve(&ph_t.transpose()).transpose())
+    }
+
     /// Innovation covariance S = H P H^T + R.
     fn innovation_cov(&self, h: &DMatrix<f64>, r: &DMatrix<f64>) -> DMatrix<f64> {
         h * &self.p * h.transpose() + r

@@ -3,11 +3,15 @@
 //! Sits between the GNSS inputs and the filter. The reference is the navigator's own
 //! INS/odometer prediction at the GNSS epoch; each epoch is tested before it is used:
 //!
-//! - distance: |r_GNSS - r_INS| > R (seed 004's fixed threshold, R = 10 m);
+//! - distance: |r_GNSS - r_INS| > R, horizontal (seed 004's fixed threshold, R = 10 m);
 //! - chi-square: the normalised innovation y^T S^-1 y with the filter's covariance,
-//!   S = H P H^T + R, against the chi-square quantile of its degrees of freedom;
-//! - window: the sum of the last N normalised innovations against the chi-square
-//!   quantile of N x dof degrees of freedom (a slow drift that each epoch hides).
+//!   S = H P H^T + R, against the chi-square quantile of its degrees of freedom
+//!   (loose: fix position and velocity; tight: all pseudoranges);
+//! - window (displacement): over each of the last N epochs j, the GNSS displacement
+//!   r_GNSS,k - r_GNSS,j against the displacement of the INS/odometer solution with
+//!   the GNSS position corrections made in between removed. A slow drift that each epoch's
+//!   innovation hides (the filter follows it) shows here, and time-correlated GNSS
+//!   errors (which a sum of squared innovations mistakes for a drift) largely cancel.
 //!
 //! States: trusted (GNSS fused) -> suspect (one failed epoch, GNSS held back) ->
 //! spoofed (`confirm_epochs` failed epochs in a row: GNSS excluded, the navigator runs
@@ -16,7 +20,18 @@
 //! engine feeds [`EpochCheck`]s and logs the [`Transition`]s.
 
 use crate::filter::chi2_threshold;
+use nalgebra::Vector3;
 use std::collections::VecDeque;
+
+/// What the GNSS is tested against.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum IntegrityReference {
+    /// The navigator's prediction at the epoch (GNSS-aided until the attack).
+    Prediction,
+    /// The free dead reckoning (INS/odometer/NHC, never corrected by GNSS): seed 004's
+    /// r_INS/OD. Needs the six-state fusion, which keeps such a solution.
+    DeadReckoning,
+}
 
 /// Settings of the monitor (`[spoofing]` in the run configuration).
 #[derive(Clone, Debug, PartialEq)]
@@ -26,14 +41,21 @@ pub struct IntegrityOptions {
     pub distance_m: Option<f64>,
     /// Tail probability of the per-epoch chi-square test; None = off.
     pub chi2_probability: Option<f64>,
-    /// Epochs in the windowed sum of normalised innovations (0 = off).
+    /// Epochs back over which GNSS and INS/odometer displacements are compared
+    /// (0 = off).
     pub window_epochs: usize,
-    /// Tail probability of the windowed test.
+    /// Tail probability of each displacement test (3 dof).
     pub window_probability: f64,
+    /// Correlation time of the GNSS position error [s] (first-order Gauss-Markov):
+    /// the displacement of the error over T has variance 2 sigma² (1 - exp(-T/tau)).
+    /// 0 = white (conservative: full 2 sigma²).
+    pub gnss_corr_time_s: f64,
     /// Failed epochs in a row that turn suspect into spoofed.
     pub confirm_epochs: usize,
     /// Continuous agreement needed before GNSS is used again [s].
     pub readmit_s: f64,
+    /// Reference of the distance and chi-square tests.
+    pub reference: IntegrityReference,
 }
 
 impl Default for IntegrityOptions {
@@ -42,10 +64,12 @@ impl Default for IntegrityOptions {
             enabled: false,
             distance_m: Some(10.0),
             chi2_probability: Some(1e-5),
-            window_epochs: 5,
+            window_epochs: 30,
             window_probability: 1e-5,
+            gnss_corr_time_s: 0.0,
             confirm_epochs: 2,
             readmit_s: 10.0,
+            reference: IntegrityReference::Prediction,
         }
     }
 }
@@ -101,13 +125,40 @@ impl Detector {
 pub struct EpochCheck {
     /// GNSS time [s].
     pub t: f64,
-    /// |r_GNSS - r_reference| [m]; NaN when the epoch has no position (e.g. tight
+    /// Horizontal |r_GNSS - r_reference| [m]; NaN when the epoch has no position (e.g. tight
     /// coupling with fewer than 4 satellites): the distance test then abstains.
     pub distance_m: f64,
     /// Normalised innovation squared y^T S^-1 y.
     pub nis: f64,
     /// Its degrees of freedom (rows of y).
     pub dof: usize,
+    /// 1-sigma of the reference position, sqrt(trace P_rr) [m].
+    pub ref_pos_std_m: f64,
+    /// Lower bound of the distance threshold [m] (0: R as configured). Tight coupling
+    /// tests the receiver's own single point fix, whose noise can exceed R.
+    pub distance_floor_m: f64,
+    /// Input of the displacement (window) test; None: the epoch has no position.
+    pub step: Option<StepInput>,
+}
+
+/// One epoch's input to the displacement test.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepInput {
+    /// Position innovation y = r_ant,INS - r_GNSS, NED [m] (before this epoch's update).
+    pub innovation_ned_m: Vector3<f64>,
+    /// 1-sigma of the fix, NED [m].
+    pub fix_std_ned_m: Vector3<f64>,
+    /// 1-sigma of the navigator's velocity, NED [m/s] (the reference's drift rate).
+    pub vel_std_ned_mps: Vector3<f64>,
+    /// Sum of the position corrections made by GNSS updates so far (before this
+    /// epoch's update), NED [m]. Velocity corrections are left in the reference: the
+    /// odometer, NHC and ZUPT mostly undo them, and counting them as persistent
+    /// over-corrects (false alarms at standstill).
+    pub gnss_correction_ned_m: Vector3<f64>,
+    /// Variance of the reference's own position increment since the previous epoch,
+    /// NED [m²], beyond (sigma_v T)²: e.g. the corrections of a dead reckoning that
+    /// the six-state fusion follows (summed over the window).
+    pub ref_increment_var_ned_m2: Vector3<f64>,
 }
 
 /// A state change, with the statistic that caused it.
@@ -136,8 +187,8 @@ type Failure = Option<(Detector, f64, f64)>;
 pub struct IntegrityMonitor {
     opt: IntegrityOptions,
     state: IntegrityState,
-    /// (nis, dof) of the last epochs, for the windowed test.
-    window: VecDeque<(f64, usize)>,
+    /// (t, step input) of the last epochs, for the displacement test.
+    window: VecDeque<(f64, StepInput)>,
     failed_in_row: usize,
     agree_since: f64,
     /// Epochs tested and transitions so far.
@@ -162,9 +213,19 @@ impl IntegrityMonitor {
         self.state
     }
 
-    /// Per-epoch tests (distance, then chi-square).
+    /// Per-epoch tests (distance, then chi-square). While dead-reckoning (spoofed,
+    /// recovering) the distance threshold widens to 3 sigma of the reference position
+    /// when that exceeds R: otherwise a reference that has drifted past R would never
+    /// let the GNSS back.
     fn epoch_failure(&self, c: &EpochCheck) -> Failure {
         if let Some(r) = self.opt.distance_m {
+            let r = match self.state {
+                IntegrityState::Spoofed | IntegrityState::Recovering => {
+                    r.max(3.0 * c.ref_pos_std_m)
+                }
+                _ => r,
+            }
+            .max(c.distance_floor_m);
             if c.distance_m.is_finite() && c.distance_m > r {
                 return Some((Detector::Distance, c.distance_m, r));
             }
@@ -178,19 +239,44 @@ impl IntegrityMonitor {
         None
     }
 
-    /// Windowed test over the last `window_epochs` epochs (only once the window is
-    /// full).
-    fn window_failure(&self) -> Failure {
-        let n = self.opt.window_epochs;
-        if n == 0 || self.window.len() < n {
+    /// Displacement test of epoch `c` against each of the last `window_epochs`
+    /// epochs j: e = (r_GNSS,k - r_GNSS,j) - (r_ref,k - r_ref,j) = dC - dy, with C the
+    /// GNSS corrections (removed from the reference) and y = r_ant,INS - r_GNSS;
+    /// e^T S^-1 e (3 dof) with S = diag(GNSS error difference + (sigma_v T)²). The
+    /// worst ratio to the threshold decides.
+    fn window_failure(&self, c: &EpochCheck) -> Failure {
+        let (n, Some(k)) = (self.opt.window_epochs, c.step.as_ref()) else {
+            return None;
+        };
+        if n == 0 {
             return None;
         }
-        let (sum, dof) = self
-            .window
-            .iter()
-            .fold((0.0, 0), |(s, d), &(nis, k)| (s + nis, d + k));
-        let th = chi2_threshold(dof.max(1), self.opt.window_probability);
-        (sum > th).then_some((Detector::Window, sum, th))
+        let th = chi2_threshold(3, self.opt.window_probability);
+        let tau = self.opt.gnss_corr_time_s;
+        let mut worst: Failure = None;
+        // Reference increment variance accumulated from epoch j+1 to k.
+        let mut ref_var = Vector3::zeros();
+        let mut later = k;
+        for (tj, j) in self.window.iter().rev().take(n) {
+            ref_var += later.ref_increment_var_ned_m2;
+            later = j;
+            let dt = c.t - tj;
+            let rho = if tau > 0.0 { (-dt / tau).exp() } else { 0.0 };
+            let e = (k.gnss_correction_ned_m - j.gnss_correction_ned_m)
+                - (k.innovation_ned_m - j.innovation_ned_m);
+            let mut stat = 0.0;
+            for a in 0..3 {
+                let (sk, sj) = (k.fix_std_ned_m[a], j.fix_std_ned_m[a]);
+                let var = sk * sk + sj * sj - 2.0 * rho * sk * sj
+                    + (k.vel_std_ned_mps[a] * dt).powi(2)
+                    + ref_var[a];
+                stat += e[a] * e[a] / var.max(1e-6);
+            }
+            if stat > th && worst.is_none_or(|(_, s, _)| stat > s) {
+                worst = Some((Detector::Window, stat, th));
+            }
+        }
+        worst
     }
 
     /// Test one epoch and decide whether its GNSS may be fused.
@@ -199,16 +285,17 @@ impl IntegrityMonitor {
         self.epochs += 1;
         let epoch_fail = self.epoch_failure(c);
         // The window watches the epochs that would be fused (trusted and suspect); in
-        // the other states the reference drifts and each epoch is tested on its own.
+        // the other states each epoch is tested on its own.
         let fail = match self.state {
             Trusted | Suspect => {
-                if self.opt.window_epochs > 0 {
-                    self.window.push_back((c.nis.min(1e12), c.dof));
+                let f = epoch_fail.or_else(|| self.window_failure(c));
+                if let (Some(step), true) = (c.step, self.opt.window_epochs > 0) {
+                    self.window.push_back((c.t, step));
                     while self.window.len() > self.opt.window_epochs {
                         self.window.pop_front();
                     }
                 }
-                epoch_fail.or_else(|| self.window_failure())
+                f
             }
             Spoofed | Recovering => epoch_fail,
         };
@@ -284,6 +371,9 @@ mod tests {
             distance_m: d,
             nis,
             dof: 3,
+            ref_pos_std_m: 0.5,
+            distance_floor_m: 0.0,
+            step: None,
         }
     }
 
@@ -332,6 +422,26 @@ mod tests {
     }
 
     #[test]
+    fn dead_reckoning_widens_the_distance_threshold_for_readmission() {
+        let mut m = IntegrityMonitor::new(on());
+        m.check(&ep(0.0, 30.0, 300.0));
+        m.check(&ep(1.0, 30.0, 300.0));
+        assert_eq!(m.state(), IntegrityState::Spoofed);
+        // After a long outage the reference is 6 m (1 sigma) off: 15 m agrees.
+        let drifted = EpochCheck {
+            ref_pos_std_m: 6.0,
+            ..ep(100.0, 15.0, 5.0)
+        };
+        assert_eq!(
+            m.check(&drifted).transition.unwrap().to,
+            IntegrityState::Recovering
+        );
+        // While trusted the threshold is R.
+        let mut m = IntegrityMonitor::new(on());
+        assert!(!m.check(&drifted).use_gnss);
+    }
+
+    #[test]
     fn a_single_outlier_is_only_suspect() {
         let mut m = IntegrityMonitor::new(on());
         m.check(&ep(0.0, 1.0, 1.0));
@@ -345,31 +455,64 @@ mod tests {
             .all(|t| t.to != IntegrityState::Spoofed));
     }
 
+    /// Epoch k of a fix whose error is `gnss_err` (NED) while the filter, fusing
+    /// every epoch, has absorbed `absorbed` of it so far (recorded as corrections).
+    fn step_ep(t: f64, gnss_err: Vector3<f64>, absorbed: Vector3<f64>) -> EpochCheck {
+        let step = StepInput {
+            innovation_ned_m: absorbed - gnss_err,
+            fix_std_ned_m: Vector3::new(1.5, 1.5, 3.0),
+            vel_std_ned_mps: Vector3::repeat(0.02),
+            gnss_correction_ned_m: absorbed,
+            ref_increment_var_ned_m2: Vector3::zeros(),
+        };
+        EpochCheck {
+            t,
+            distance_m: step.innovation_ned_m.norm(),
+            nis: 1.0,
+            dof: 3,
+            ref_pos_std_m: 0.5,
+            distance_floor_m: 0.0,
+            step: Some(step),
+        }
+    }
+
     #[test]
-    fn the_window_catches_what_each_epoch_passes() {
-        // NIS 12 per epoch with 3 dof: below the per-epoch 1e-5 quantile (25.9), but
-        // 10 epochs sum to 120 against the 30-dof quantile (about 68).
-        let mut m = IntegrityMonitor::new(IntegrityOptions {
-            window_epochs: 10,
+    fn the_displacement_window_catches_a_followed_drift() {
+        // A 0.5 m/s drift east that the filter follows at 60 %: each innovation stays
+        // small (distance and NIS pass), but the GNSS moves 0.5 m/s against a reference
+        // that does not. With tau = 30 s and sigma 1.5 m the 20-epoch difference has
+        // sigma 1.5 sqrt(2 (1 - exp(-2/3))) = 1.48 m (+0.4 m reference): 10 m passes
+        // the 3-dof 1e-5 quantile (25.9).
+        let opt = IntegrityOptions {
+            gnss_corr_time_s: 30.0,
             ..on()
-        });
+        };
+        let mut m = IntegrityMonitor::new(opt.clone());
+        let drift = |k: usize| Vector3::new(0.0, 0.5 * k as f64, 0.0);
         let mut first = None;
-        for k in 0..12 {
-            let v = m.check(&ep(k as f64, 3.0, 12.0));
+        for k in 0..40 {
+            let v = m.check(&step_ep(k as f64, drift(k), drift(k) * 0.6));
             if let (None, Some(tr)) = (first, v.transition) {
                 first = Some(tr);
             }
         }
         let tr = first.expect("window detection");
         assert_eq!(tr.detector, Detector::Window);
-        assert_eq!(tr.t, 9.0);
         assert!(tr.statistic > tr.threshold);
-        // Off: no detection.
+        // Detected while the false track is less than 15 m off (t < 30 s).
+        assert!(tr.t > 5.0 && tr.t < 30.0, "{tr:?}");
+        // A constant GNSS bias (perfectly correlated error) is no drift: nothing.
+        let mut m = IntegrityMonitor::new(opt.clone());
+        let bias = Vector3::new(4.0, -4.0, 6.0);
+        assert!((0..40).all(|k| m.check(&step_ep(k as f64, bias, bias * 0.2)).use_gnss));
+        // White GNSS noise assumed (tau = 0): the same drift is not seen in 20 epochs.
         let mut m = IntegrityMonitor::new(IntegrityOptions {
-            window_epochs: 0,
-            ..on()
+            gnss_corr_time_s: 0.0,
+            ..opt
         });
-        assert!((0..12).all(|k| m.check(&ep(k as f64, 3.0, 12.0)).use_gnss));
+        assert!((0..20).all(|k| m
+            .check(&step_ep(k as f64, drift(k), drift(k) * 0.6))
+            .use_gnss));
     }
 
     #[test]

@@ -18,6 +18,7 @@ pub mod filter;
 pub mod integrity;
 pub mod mechanization;
 pub mod outage;
+pub mod six_state;
 pub mod state;
 pub mod static_detect;
 pub mod types;

@@ -16,11 +16,11 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::Vector3;
 use navfuse_core::config::{
-    AttitudeInit, FilterOptions, GnssOptions, HeadingOptions, ImuNoise, InitialState, NavConfig,
-    NhcMode, NhcOptions, OdometerOptions, RangeRate, TightOptions, TimeOffsetConfig,
+    AttitudeInit, FilterOptions, GnssFusion, GnssOptions, HeadingOptions, ImuNoise, InitialState,
+    NavConfig, NhcMode, NhcOptions, OdometerOptions, RangeRate, TightOptions, TimeOffsetConfig,
     VehicleOptions, ZuptOptions, DEFAULT_COVARIANCE_PERIOD_S, DEFAULT_GATE_TIMEOUT_S,
 };
-use navfuse_core::integrity::IntegrityOptions;
+use navfuse_core::integrity::{IntegrityOptions, IntegrityReference};
 use navfuse_core::outage::{OutageSchedule, Periodic, Window};
 use navfuse_core::types::ImuErrors;
 use serde::de::{self, IgnoredAny, MapAccess, SeqAccess, Visitor};
@@ -663,6 +663,22 @@ enum TCoupling {
     Tight,
 }
 
+/// `spoofing.reference` (core::integrity::IntegrityReference).
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+enum TReference {
+    Prediction,
+    DeadReckoning,
+}
+
+/// `gnss.fusion` (core::config::GnssFusion).
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+enum TFusion {
+    ErrorState,
+    SixState,
+}
+
 #[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
 enum TRangeRate {
@@ -750,6 +766,10 @@ struct TGnss {
     outages: Option<Vec<Vec<f64>>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     outage_every: Option<OneOrMany<TOutageEvery>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    fusion: Option<TFusion>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    six_state_every: Option<f64>,
 }
 
 #[derive(Debug, Deserialize, Serialize)]
@@ -948,6 +968,10 @@ struct TSpoofing {
     confirm_epochs: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     readmit_s: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    gnss_corr_time_s: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    reference: Option<TReference>,
 }
 
 #[derive(Debug, Deserialize, Serialize)]
@@ -1173,6 +1197,7 @@ fn convert(raw: TomlRoot, base: &Path) -> KResult<Converted> {
                 gate_probability: None,
                 gate_timeout_s: DEFAULT_GATE_TIMEOUT_S,
                 outages: OutageSchedule::default(),
+                fusion: GnssFusion::ErrorState,
             },
             Vec::new(),
             TightOptions::default(),
@@ -1396,6 +1421,15 @@ fn convert(raw: TomlRoot, base: &Path) -> KResult<Converted> {
         None => ZuptOptions::default(),
     };
 
+    if integrity.enabled
+        && integrity.reference == IntegrityReference::DeadReckoning
+        && !matches!(gnss_opts.fusion, GnssFusion::SixState { .. })
+    {
+        return Err(kerr(
+            "spoofing.reference",
+            "\"dead_reckoning\" needs gnss.fusion = \"six_state\" (only that fusion keeps a dead reckoning that GNSS does not correct); use \"prediction\"".to_string(),
+        ));
+    }
     let nav = NavConfig {
         imu_noise,
         tight,
@@ -1829,6 +1863,17 @@ fn convert_spoofing(x: &TSpoofing) -> KResult<IntegrityOptions> {
             same,
             d.readmit_s,
         )?,
+        gnss_corr_time_s: opt_or(
+            "spoofing.gnss_corr_time_s",
+            x.gnss_corr_time_s,
+            non_negative,
+            same,
+            d.gnss_corr_time_s,
+        )?,
+        reference: match x.reference {
+            None | Some(TReference::Prediction) => IntegrityReference::Prediction,
+            Some(TReference::DeadReckoning) => IntegrityReference::DeadReckoning,
+        },
     })
 }
 
@@ -2212,6 +2257,7 @@ fn convert_gnss(
         }
     }
 
+    let fusion = convert_fusion(g, tight.enabled)?;
     let opts = GnssOptions {
         lever_arm_b: vec3(lever),
         use_velocity: g.use_velocity.unwrap_or(true),
@@ -2220,8 +2266,42 @@ fn convert_gnss(
         gate_probability,
         gate_timeout_s,
         outages,
+        fusion,
     };
     Ok((src, opts, relative, tight))
+}
+
+/// `gnss.fusion` and `gnss.six_state_every` (SYSTEM.md §5; seed 004 §3): the
+/// six-state cascade takes fixes, so not with tight coupling.
+fn convert_fusion(g: &TGnss, tight: bool) -> KResult<GnssFusion> {
+    match g.fusion.unwrap_or(TFusion::ErrorState) {
+        TFusion::ErrorState => {
+            if g.six_state_every.is_some() {
+                return Err(kerr(
+                    "gnss.six_state_every",
+                    "applies only to gnss.fusion = \"six_state\"",
+                ));
+            }
+            Ok(GnssFusion::ErrorState)
+        }
+        TFusion::SixState => {
+            if tight {
+                return Err(kerr(
+                    "gnss.fusion",
+                    "\"six_state\" fuses GNSS fixes (loose coupling) only, and gnss.coupling is \"tight\" (the default for rinex): set gnss.coupling = \"loose\", or gnss.fusion = \"error_state\"",
+                ));
+            }
+            let n = g.six_state_every.unwrap_or(1.0);
+            let whole = n.fract() == 0.0 && (1.0..=1e6).contains(&n);
+            match std::num::NonZeroU32::new(if whole { n as u32 } else { 0 }) {
+                Some(every) => Ok(GnssFusion::SixState { every }),
+                None => Err(kerr(
+                    "gnss.six_state_every",
+                    format!("expected a whole number of GNSS epochs >= 1 (1 = every fix), got {n}"),
+                )),
+            }
+        }
+    }
 }
 
 /// `gnss.format = "rinex"`: navigation file, coupling, DGPS and `[gnss.tight]`.
@@ -2426,6 +2506,8 @@ impl TGnss {
             gate_timeout_s: None,
             outages: None,
             outage_every: None,
+            fusion: None,
+            six_state_every: None,
         }
     }
 }
@@ -2600,6 +2682,14 @@ fn to_raw(c: &RunConfig) -> TomlRoot {
                     .collect()
             }),
             outage_every: (!every.is_empty()).then_some(OneOrMany(every)),
+            fusion: Some(match go.fusion {
+                GnssFusion::ErrorState => TFusion::ErrorState,
+                GnssFusion::SixState { .. } => TFusion::SixState,
+            }),
+            six_state_every: match go.fusion {
+                GnssFusion::ErrorState => None,
+                GnssFusion::SixState { every } => Some(f64::from(every.get())),
+            },
             ..TGnss::no_rinex()
         };
         if let GnssFormat::Rinex(r) = &g.format {
@@ -2759,6 +2849,11 @@ fn to_raw(c: &RunConfig) -> TomlRoot {
         window_probability: Some(sp.window_probability),
         confirm_epochs: Some(sp.confirm_epochs as f64),
         readmit_s: Some(sp.readmit_s),
+        gnss_corr_time_s: Some(sp.gnss_corr_time_s),
+        reference: Some(match sp.reference {
+            IntegrityReference::Prediction => TReference::Prediction,
+            IntegrityReference::DeadReckoning => TReference::DeadReckoning,
+        }),
     });
     TomlRoot {
         imu,
