@@ -91,6 +91,10 @@ fn monitor_defaults(cfg: &mut RunConfig) {
 /// dead reckoning (r_INS/OD) with its own covariance.
 fn seed004_architecture(cfg: &mut RunConfig) {
     cfg.nav.integrity.gnss_corr_time_s = 30.0;
+    // With no GNSS to calibrate them, the dead reckoning's biases wander as the
+    // grade's in-run Gauss-Markov process (IMU500: 100 s), not the slow 1 h process
+    // that a GNSS-aided filter uses to keep what it has learnt.
+    cfg.nav.imu_noise.corr_time_s = 100.0;
     cfg.nav.gnss.fusion = navfuse_core::config::GnssFusion::SixState {
         every: std::num::NonZeroU32::MIN,
     };

@@ -938,14 +938,23 @@ impl Navigator {
             .collect();
         self.check_clock(epoch.t, &sats);
         if self.monitor.is_some() {
-            // The epoch as a whole: the receiver's own fix against the prediction
-            // (distance), and all pseudoranges jointly (chi-square).
+            // The epoch as a whole, through its single point fix when it has one: the
+            // fix (and its Doppler velocity) against the prediction, as in loose
+            // coupling, with the fix's own covariance (the joint pseudorange NIS is
+            // inflated by per-satellite biases the filter does not model). With 1-3
+            // satellites, no fix: all pseudoranges jointly (chi-square only).
             let fix_pos = epoch.fix.as_ref().map(|f| Aiding::GnssPosition(f));
-            let prs: Vec<Aiding> = sats
-                .iter()
-                .filter(|s| s.pseudorange_m.is_some())
-                .map(Aiding::Pseudorange)
-                .collect();
+            let prs: Vec<Aiding> = match epoch.fix.as_ref() {
+                Some(f) if f.vel_ned.is_some() => {
+                    vec![Aiding::GnssPosition(f), Aiding::GnssVelocity(f)]
+                }
+                Some(f) => vec![Aiding::GnssPosition(f)],
+                None => sats
+                    .iter()
+                    .filter(|s| s.pseudorange_m.is_some())
+                    .map(Aiding::Pseudorange)
+                    .collect(),
+            };
             // The single point fix is noisier than a receiver's filtered fix: the
             // distance threshold is at least its 3-sigma.
             let floor = epoch.fix.as_ref().map_or(0.0, |f| 3.0 * f.std_ned.norm());
