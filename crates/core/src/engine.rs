@@ -49,6 +49,9 @@ pub enum Event {
     Singular { t: f64, source: &'static str },
     /// Fixes had been rejected for `streak_s` seconds; this one was used ungated.
     GateBypassed { t: f64, streak_s: f64 },
+    /// Tight coupling: every pseudorange had been rejected for `streak_s` seconds; the
+    /// position (and velocity) were reset to the single point fix.
+    TightReset { t: f64, streak_s: f64 },
     /// How the initial attitude was found.
     Aligned {
         t: f64,
@@ -86,6 +89,10 @@ impl std::fmt::Display for Event {
             Event::GateBypassed { t, streak_s } => write!(
                 f,
                 "{t:.3} gnss fix used without the gate: fixes rejected for {streak_s:.1} s (gate timeout)"
+            ),
+            Event::TightReset { t, streak_s } => write!(
+                f,
+                "{t:.3} position and velocity reset to the single point fix: pseudoranges rejected for {streak_s:.1} s (gate timeout)"
             ),
             Event::Aligned { t, method, rpy_deg } => write!(
                 f,
@@ -239,6 +246,9 @@ struct TightState {
     last_imu_ecef_m: Vector3<f64>,
     /// C_n^e C_b^n l^b at the previous epoch [m].
     prev_lever_ecef_m: Vector3<f64>,
+    /// Time of the first of the current run of epochs whose pseudoranges were all
+    /// rejected.
+    pr_reject_since: Option<f64>,
 }
 
 /// Chi-square gate for `dof` rows at tail probability `p`.
@@ -991,7 +1001,27 @@ impl Navigator {
                 .filter(|s| s.pseudorange_m.is_some())
                 .map(Aiding::Pseudorange)
                 .collect();
-            used |= self.fuse_snooped(&rows, beyond_gate, |_, _, _| {});
+            let pr_used = self.fuse_snooped(&rows, beyond_gate, |_, _, _| {});
+            used |= pr_used;
+            if pr_used || rows.is_empty() {
+                self.tight.pr_reject_since = None;
+            } else {
+                let since = *self.tight.pr_reject_since.get_or_insert(epoch.t);
+                // The filter has drifted away from every satellite (e.g. after a long
+                // spoofing attack or outage): start again from the single point fix,
+                // as the loose gate timeout does with a fix.
+                if let (Some(fix), true) = (
+                    epoch.fix.as_ref(),
+                    epoch.t - since >= self.cfg.gnss.gate_timeout_s,
+                ) {
+                    self.reset_to_fix(fix);
+                    self.summary.events.push(Event::TightReset {
+                        t: epoch.t,
+                        streak_s: epoch.t - since,
+                    });
+                    self.tight.pr_reject_since = None;
+                }
+            }
         }
         // The next TDCP interval starts from the attitude after all of this epoch's
         // updates.
@@ -1004,6 +1034,28 @@ impl Navigator {
         } else {
             self.summary.gnss_rejected += 1;
         }
+    }
+
+    /// Reset position (and velocity, when the fix has one) to a GNSS fix, with the
+    /// fix's variances and no correlation; the clock is set again at the next epoch and
+    /// carrier differencing restarts.
+    fn reset_to_fix(&mut self, fix: &GnssFix) {
+        self.flush_covariance();
+        let c_bn = self.nav.q_bn.to_rotation_matrix().into_inner();
+        let old_lla = self.nav.lla;
+        self.nav.lla = lla_add_ned(&fix.lla, &(-(c_bn * self.cfg.gnss.lever_arm_b)));
+        let dv = fix.vel_ned.map_or(Vector3::zeros(), |v| v - self.nav.v_n);
+        self.nav.v_n += dv;
+        self.mech.shift_previous(&(self.nav.lla - old_lla), &dv);
+        for k in 0..3 {
+            self.filter.reset_state(POS + k, fix.std_ned[k].powi(2));
+            if let Some(sv) = fix.vel_std_ned {
+                self.filter.reset_state(VEL + k, sv[k].powi(2));
+            }
+        }
+        self.tight.clock_set = false;
+        self.tight.prev_t = None;
+        self.tight.last_imu_ecef_m = lla_to_ecef(&self.nav.lla);
     }
 
     /// Set the clock bias (and drift) states from the measurements at the first
