@@ -90,15 +90,19 @@ fn monitor_defaults(cfg: &mut RunConfig) {
 /// reckoning that GNSS never corrects, and the monitor testing the GNSS against that
 /// dead reckoning (r_INS/OD) with its own covariance.
 fn seed004_architecture(cfg: &mut RunConfig) {
-    cfg.nav.integrity.gnss_corr_time_s = 30.0;
+    six_state_fusion(cfg);
     // With no GNSS to calibrate them, the dead reckoning's biases wander as the
     // grade's in-run Gauss-Markov process (IMU500: 100 s), not the slow 1 h process
     // that a GNSS-aided filter uses to keep what it has learnt.
     cfg.nav.imu_noise.corr_time_s = 100.0;
+    cfg.nav.integrity.reference = IntegrityReference::DeadReckoning;
+}
+
+/// Seed 004's 6-state fusion of every fix (`[gnss] fusion = "six_state"`).
+fn six_state_fusion(cfg: &mut RunConfig) {
     cfg.nav.gnss.fusion = navfuse_core::config::GnssFusion::SixState {
         every: std::num::NonZeroU32::MIN,
     };
-    cfg.nav.integrity.reference = IntegrityReference::DeadReckoning;
 }
 
 /// Seed 004's detector alone: distance R = 10 m, the statistical tests off.
@@ -108,6 +112,14 @@ fn distance_only(cfg: &mut RunConfig) {
     let i = &mut cfg.nav.integrity;
     i.distance_m = Some(10.0);
     i.chi2_probability = None;
+    i.window_epochs = 0;
+}
+
+/// The per-epoch chi-square test alone (distance and window off).
+fn chi2_only(cfg: &mut RunConfig) {
+    monitor_defaults(cfg);
+    let i = &mut cfg.nav.integrity;
+    i.distance_m = None;
     i.window_epochs = 0;
 }
 
@@ -172,9 +184,7 @@ fn variants() -> Vec<Variant> {
             label: "free INS-only dead reckoning, chi-square with its own covariance alone",
             apply: |c, sc| {
                 attack_start(c, sc);
-                distance_only(c);
-                c.nav.integrity.distance_m = None;
-                c.nav.integrity.chi2_probability = IntegrityOptions::default().chi2_probability;
+                chi2_only(c);
                 seed004_architecture(c);
             },
         },
@@ -205,9 +215,7 @@ fn variants() -> Vec<Variant> {
                 attack_start(c, sc);
                 odometer_nhc(c, sc);
                 monitor_defaults(c);
-                c.nav.gnss.fusion = navfuse_core::config::GnssFusion::SixState {
-                    every: std::num::NonZeroU32::MIN,
-                };
+                six_state_fusion(c);
             },
         },
     ]

@@ -859,7 +859,7 @@ impl Navigator {
                 step: Some(StepInput {
                     innovation_ned_m: lla_diff_ned(&self.nav.lla, &imu_fix.lla),
                     fix_std_ned_m: imu_fix.pos_std_ned_m,
-                    vel_std_ned_mps: Vector3::from_fn(|k, _| self.filter.std(VEL + k)),
+                    vel_std_ned_mps: self.vel_std_ned_mps(),
                     gnss_correction_ned_m: Vector3::zeros(),
                     ref_increment_var_ned_m2: dr_increment_var_ned_m2,
                 }),
@@ -1042,14 +1042,24 @@ impl Navigator {
     fn reset_to_fix(&mut self, fix: &GnssFix) {
         self.flush_covariance();
         let c_bn = self.nav.q_bn.to_rotation_matrix().into_inner();
+        let imu = ImuFix::from_antenna(
+            fix,
+            &c_bn,
+            &self.w_ib_b,
+            &self.cfg.gnss.lever_arm_b,
+            &self.nav.v_n,
+        );
         let old_lla = self.nav.lla;
-        self.nav.lla = lla_add_ned(&fix.lla, &(-(c_bn * self.cfg.gnss.lever_arm_b)));
-        let dv = fix.vel_ned.map_or(Vector3::zeros(), |v| v - self.nav.v_n);
+        self.nav.lla = imu.lla;
+        let dv = imu
+            .vel_ned_mps
+            .map_or(Vector3::zeros(), |v| v - self.nav.v_n);
         self.nav.v_n += dv;
         self.mech.shift_previous(&(self.nav.lla - old_lla), &dv);
         for k in 0..3 {
-            self.filter.reset_state(POS + k, fix.std_ned[k].powi(2));
-            if let Some(sv) = fix.vel_std_ned {
+            self.filter
+                .reset_state(POS + k, imu.pos_std_ned_m[k].powi(2));
+            if let Some(sv) = imu.vel_std_ned_mps {
                 self.filter.reset_state(VEL + k, sv[k].powi(2));
             }
         }
@@ -1186,7 +1196,7 @@ impl Navigator {
             return true;
         };
         let nis = self.filter.nis(&lin.y, &lin.h, &lin.r).unwrap_or(f64::NAN);
-        let vel_std_ned_mps = Vector3::from_fn(|k, _| self.filter.std(VEL + k));
+        let vel_std_ned_mps = self.vel_std_ned_mps();
         let step = dist_lin.as_ref().map(|l| StepInput {
             innovation_ned_m: Vector3::new(l.y[0], l.y[1], l.y[2]),
             fix_std_ned_m: Vector3::from_fn(|k, _| l.r[(k, k)].max(0.0).sqrt()),
@@ -1211,6 +1221,11 @@ impl Navigator {
             step,
         };
         self.monitor_verdict(&check)
+    }
+
+    /// 1-sigma of the navigator's velocity, NED [m/s] (as of the last covariance flush).
+    fn vel_std_ned_mps(&self) -> Vector3<f64> {
+        Vector3::from_fn(|k, _| self.filter.std(VEL + k))
     }
 
     /// Feed one epoch to the monitor, log its transition; true if GNSS may be fused.
