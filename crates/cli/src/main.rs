@@ -21,9 +21,15 @@ use std::process::ExitCode;
     version,
     about = "GNSS/INS integrated navigation: strapdown INS + error-state EKF with GNSS aiding",
     long_about = "GNSS/INS integrated navigation: strapdown INS (NED, WGS-84, coning/sculling) with a \
-closed-loop error-state EKF (21 states) and loosely coupled GNSS position/velocity aiding.\n\n\
-Inputs: KF-GINS text files, CSV IMU logs, the rtklibexplorer raw IMU log, RTKLIB .pos solutions. \
-Outputs: KF-GINS .nav / IMU_ERR / STD files and CSV. Formats: docs/FORMATS.md; configuration keys: docs/CONFIG.md."
+closed-loop error-state EKF (21 states, plus odometer scale, mounting, receiver clock and time-offset states as configured). Aiding: \
+loosely coupled GNSS position/velocity; tightly coupled pseudoranges with Doppler or time-differenced \
+carrier phase (RINEX 3, broadcast ephemeris, DGPS corrections); heading from course over ground or \
+a dual antenna; odometer, non-holonomic constraint, zero velocity; a GNSS integrity monitor against \
+spoofing with dead-reckoning fallback.\n\n\
+Inputs: KF-GINS text files, CSV IMU logs, the rtklibexplorer raw IMU log, RTKLIB .pos solutions, RINEX 3 \
+observation and navigation files, odometer and heading logs, DGPS corrections. \
+Outputs: KF-GINS .nav / IMU_ERR / STD files, CSV, events and integrity logs. Formats: docs/FORMATS.md; \
+configuration keys: docs/CONFIG.md."
 )]
 struct Cli {
     #[command(subcommand)]

@@ -2,10 +2,7 @@
 //! seed 000's simulated UAV experiment (`navfuse reproduce seed000`).
 
 mod common;
-use common::{navfuse_ok, run, shared, simulate, tmp};
-use nalgebra::Vector3;
-use navfuse_core::earth::lla_diff_ned;
-use navfuse_io::nav::read_nav;
+use common::{errors_ned, navfuse_ok, run, shared, simulate, tmp};
 use serde_json::Value;
 use std::collections::HashMap;
 use std::path::Path;
@@ -65,23 +62,6 @@ fn seed000_dgps_tdcp_beats_tight_doppler() {
         m * 100.0
     );
     assert!(m >= 0.80, "{m}");
-}
-
-/// Position error vectors NED [m] of `solution.nav` against `truth.nav` at the whole
-/// seconds `t0 .. t1` (both files hold those epochs).
-fn errors_ned(sol: &Path, truth: &Path, t0: f64, t1: f64) -> Vec<(f64, Vector3<f64>)> {
-    let key = |t: f64| (t * 100.0).round() as i64;
-    let truth: HashMap<i64, Vector3<f64>> = read_nav(truth)
-        .unwrap()
-        .into_iter()
-        .map(|(_, s)| (key(s.t), s.lla))
-        .collect();
-    read_nav(sol)
-        .unwrap()
-        .into_iter()
-        .filter(|(_, s)| s.t >= t0 - 1e-6 && s.t <= t1 + 1e-6 && (s.t - s.t.round()).abs() < 1e-6)
-        .map(|(_, s)| (s.t, lla_diff_ned(&s.lla, &truth[&key(s.t)])))
-        .collect()
 }
 
 /// scenarios/blockage_2sat.toml: a car, 60 s with only the 2 highest satellites. The

@@ -24,6 +24,7 @@ use crate::error_model::{fill_f, fill_qc, Discretizer, MeanMotion};
 use crate::filter::{chi2_threshold, Eskf, UpdateOutcome};
 use crate::integrity::{
     EpochCheck, IntegrityMonitor, IntegrityReference, IntegrityState, StepInput, Transition,
+    Verdict,
 };
 use crate::mechanization::Mechanizer;
 use crate::six_state::{ImuFix, SixState, SixStateOutcome};
@@ -49,9 +50,10 @@ pub enum Event {
     Singular { t: f64, source: &'static str },
     /// Fixes had been rejected for `streak_s` seconds; this one was used ungated.
     GateBypassed { t: f64, streak_s: f64 },
-    /// Tight coupling: every pseudorange had been rejected for `streak_s` seconds; the
-    /// position (and velocity) were reset to the single point fix.
-    TightReset { t: f64, streak_s: f64 },
+    /// Tight coupling: no pseudorange had been fused for `gap_s` seconds (outage,
+    /// rejection streak, or dead reckoning under the integrity monitor); the single
+    /// point fix was fused without the gate before the pseudoranges.
+    TightReset { t: f64, gap_s: f64 },
     /// How the initial attitude was found.
     Aligned {
         t: f64,
@@ -90,9 +92,9 @@ impl std::fmt::Display for Event {
                 f,
                 "{t:.3} gnss fix used without the gate: fixes rejected for {streak_s:.1} s (gate timeout)"
             ),
-            Event::TightReset { t, streak_s } => write!(
+            Event::TightReset { t, gap_s } => write!(
                 f,
-                "{t:.3} position and velocity reset to the single point fix: pseudoranges rejected for {streak_s:.1} s (gate timeout)"
+                "{t:.3} single point fix used without the gate: no pseudorange used for {gap_s:.1} s (gate timeout)"
             ),
             Event::Aligned { t, method, rpy_deg } => write!(
                 f,
@@ -246,9 +248,8 @@ struct TightState {
     last_imu_ecef_m: Vector3<f64>,
     /// C_n^e C_b^n l^b at the previous epoch [m].
     prev_lever_ecef_m: Vector3<f64>,
-    /// Time of the first of the current run of epochs whose pseudoranges were all
-    /// rejected.
-    pr_reject_since: Option<f64>,
+    /// Time of the last epoch with a pseudorange fused (None: none yet).
+    last_pr_used_t: Option<f64>,
 }
 
 /// Chi-square gate for `dof` rows at tail probability `p`.
@@ -754,7 +755,7 @@ impl Navigator {
             if use_vel && f.vel_ned.is_some() {
                 rows.push(Aiding::GnssVelocity(&f));
             }
-            if !self.integrity_check(fix.t, &rows, Some(pos), 0.0) {
+            if !self.integrity_check(fix.t, &rows, Some(pos), 0.0).use_gnss {
                 self.summary.gnss_rejected += 1;
                 return;
             }
@@ -864,7 +865,7 @@ impl Navigator {
                     ref_increment_var_ned_m2: dr_increment_var_ned_m2,
                 }),
             };
-            if !self.monitor_verdict(&check) {
+            if !self.monitor_verdict(&check).use_gnss {
                 self.summary.gnss_rejected += 1;
                 return;
             }
@@ -968,11 +969,31 @@ impl Navigator {
             // The single point fix is noisier than a receiver's filtered fix: the
             // distance threshold is at least its 3-sigma.
             let floor = epoch.fix.as_ref().map_or(0.0, |f| 3.0 * f.std_ned.norm());
-            if !self.integrity_check(epoch.t, &prs, fix_pos, floor) {
+            let verdict = self.integrity_check(epoch.t, &prs, fix_pos, floor);
+            if !verdict.use_gnss {
                 // Nothing of this epoch is used; carrier differencing restarts.
                 self.tight.prev_t = None;
                 self.summary.gnss_rejected += 1;
                 return;
+            }
+        }
+        // No pseudorange fused for gate_timeout_s (an outage, a long rejection streak,
+        // or dead reckoning while the monitor held GNSS out): the solution may have
+        // drifted beyond the pseudorange gates, and the clock reset would absorb part of
+        // the offset, so the single point fix pulls it back first (as the loose gate
+        // timeout does with a fix) and the clock is set again from there.
+        if let (Some(fix), Some(t0), true) = (
+            epoch.fix.as_ref(),
+            self.tight.last_pr_used_t,
+            opt.use_pseudorange,
+        ) {
+            if epoch.t - t0 >= self.cfg.gnss.gate_timeout_s {
+                self.fuse_fix_ungated(fix);
+                self.summary.events.push(Event::TightReset {
+                    t: epoch.t,
+                    gap_s: epoch.t - t0,
+                });
+                self.check_clock(epoch.t, &sats);
             }
         }
         let mut used = false;
@@ -1001,26 +1022,9 @@ impl Navigator {
                 .filter(|s| s.pseudorange_m.is_some())
                 .map(Aiding::Pseudorange)
                 .collect();
-            let pr_used = self.fuse_snooped(&rows, beyond_gate, |_, _, _| {});
-            used |= pr_used;
-            if pr_used || rows.is_empty() {
-                self.tight.pr_reject_since = None;
-            } else {
-                let since = *self.tight.pr_reject_since.get_or_insert(epoch.t);
-                // The filter has drifted away from every satellite (e.g. after a long
-                // spoofing attack or outage): start again from the single point fix,
-                // as the loose gate timeout does with a fix.
-                if let (Some(fix), true) = (
-                    epoch.fix.as_ref(),
-                    epoch.t - since >= self.cfg.gnss.gate_timeout_s,
-                ) {
-                    self.reset_to_fix(fix);
-                    self.summary.events.push(Event::TightReset {
-                        t: epoch.t,
-                        streak_s: epoch.t - since,
-                    });
-                    self.tight.pr_reject_since = None;
-                }
+            if self.fuse_snooped(&rows, beyond_gate, |_, _, _| {}) {
+                used = true;
+                self.tight.last_pr_used_t = Some(epoch.t);
             }
         }
         // The next TDCP interval starts from the attitude after all of this epoch's
@@ -1036,36 +1040,18 @@ impl Navigator {
         }
     }
 
-    /// Reset position (and velocity, when the fix has one) to a GNSS fix, with the
-    /// fix's variances and no correlation; the clock is set again at the next epoch and
-    /// carrier differencing restarts.
-    fn reset_to_fix(&mut self, fix: &GnssFix) {
-        self.flush_covariance();
-        let c_bn = self.nav.q_bn.to_rotation_matrix().into_inner();
-        let imu = ImuFix::from_antenna(
-            fix,
-            &c_bn,
-            &self.w_ib_b,
-            &self.cfg.gnss.lever_arm_b,
-            &self.nav.v_n,
-        );
-        let old_lla = self.nav.lla;
-        self.nav.lla = imu.lla;
-        let dv = imu
-            .vel_ned_mps
-            .map_or(Vector3::zeros(), |v| v - self.nav.v_n);
-        self.nav.v_n += dv;
-        self.mech.shift_previous(&(self.nav.lla - old_lla), &dv);
-        for k in 0..3 {
-            self.filter
-                .reset_state(POS + k, imu.pos_std_ned_m[k].powi(2));
-            if let Some(sv) = imu.vel_std_ned_mps {
-                self.filter.reset_state(VEL + k, sv[k].powi(2));
-            }
+    /// Fuse a single point fix (position, and velocity when it has one) as a loose
+    /// update without the gate: it pulls back a solution that has drifted beyond the
+    /// pseudorange gates, and corrects attitude and biases through the covariance
+    /// (a plain reset would leave an overconfident attitude). The clock is set again
+    /// at the next epoch and carrier differencing restarts.
+    fn fuse_fix_ungated(&mut self, fix: &GnssFix) {
+        self.fuse(Aiding::GnssPosition(fix), None);
+        if fix.vel_ned.is_some() {
+            self.fuse(Aiding::GnssVelocity(fix), None);
         }
         self.tight.clock_set = false;
         self.tight.prev_t = None;
-        self.tight.last_imu_ecef_m = lla_to_ecef(&self.nav.lla);
     }
 
     /// Set the clock bias (and drift) states from the measurements at the first
@@ -1184,7 +1170,7 @@ impl Navigator {
         nis_rows: &[Aiding],
         distance_row: Option<Aiding>,
         distance_floor_m: f64,
-    ) -> bool {
+    ) -> Verdict {
         self.flush_covariance();
         let ctx = self.context(self.tight.clock);
         let stack = |list: &[Aiding]| {
@@ -1193,7 +1179,10 @@ impl Navigator {
         };
         let dist_lin = distance_row.and_then(|a| stack(&[a]));
         let Some(lin) = stack(nis_rows) else {
-            return true;
+            return Verdict {
+                use_gnss: true,
+                transition: None,
+            };
         };
         let nis = self.filter.nis(&lin.y, &lin.h, &lin.r).unwrap_or(f64::NAN);
         let vel_std_ned_mps = self.vel_std_ned_mps();
@@ -1228,14 +1217,14 @@ impl Navigator {
         Vector3::from_fn(|k, _| self.filter.std(VEL + k))
     }
 
-    /// Feed one epoch to the monitor, log its transition; true if GNSS may be fused.
-    fn monitor_verdict(&mut self, check: &EpochCheck) -> bool {
+    /// Feed one epoch to the monitor and log its transition.
+    fn monitor_verdict(&mut self, check: &EpochCheck) -> Verdict {
         let monitor = self.monitor.as_mut().expect("monitor enabled");
         let v = monitor.check(check);
         if let Some(tr) = v.transition {
             self.summary.events.push(Event::Integrity(tr));
         }
-        v.use_gnss
+        v
     }
 
     /// Integrity state of the GNSS (trusted when no monitor runs).

@@ -213,17 +213,21 @@ impl IntegrityMonitor {
         self.state
     }
 
-    /// Per-epoch tests (distance, then chi-square). While dead-reckoning (spoofed,
-    /// recovering) the distance threshold widens to 3 sigma of the reference position
-    /// when that exceeds R: otherwise a reference that has drifted past R would never
-    /// let the GNSS back.
+    /// Per-epoch tests (distance, then chi-square). The distance threshold widens to
+    /// 3 sigma of the reference position when that exceeds R: a reference that has
+    /// drifted past R (dead reckoning while spoofed, or the prediction through an
+    /// outage) would otherwise refuse the true GNSS; the chi-square test still
+    /// applies. Seed 004's free dead-reckoning reference keeps its fixed R while
+    /// trusted (its covariance grows all the time, by design).
     fn epoch_failure(&self, c: &EpochCheck) -> Failure {
         if let Some(r) = self.opt.distance_m {
-            let r = match self.state {
-                IntegrityState::Spoofed | IntegrityState::Recovering => {
-                    r.max(3.0 * c.ref_pos_std_m)
-                }
-                _ => r,
+            let widen = self.state == IntegrityState::Spoofed
+                || self.state == IntegrityState::Recovering
+                || self.opt.reference == IntegrityReference::Prediction;
+            let r = if widen {
+                r.max(3.0 * c.ref_pos_std_m)
+            } else {
+                r
             }
             .max(c.distance_floor_m);
             if c.distance_m.is_finite() && c.distance_m > r {
@@ -242,7 +246,8 @@ impl IntegrityMonitor {
     /// Displacement test of epoch `c` against each of the last `window_epochs`
     /// epochs j: e = (r_GNSS,k - r_GNSS,j) - (r_ref,k - r_ref,j) = dC - dy, with C the
     /// GNSS corrections (removed from the reference) and y = r_ant,INS - r_GNSS;
-    /// e^T S^-1 e (3 dof) with S = diag(GNSS error difference + (sigma_v T)²). The
+    /// e^T S^-1 e (3 dof) with S = diag(GNSS error difference + (sigma_v T)²), sigma_v
+    /// the largest of the epochs after j. The
     /// worst ratio to the threshold decides.
     fn window_failure(&self, c: &EpochCheck) -> Failure {
         let (n, Some(k)) = (self.opt.window_epochs, c.step.as_ref()) else {
@@ -254,11 +259,15 @@ impl IntegrityMonitor {
         let th = chi2_threshold(3, self.opt.window_probability);
         let tau = self.opt.gnss_corr_time_s;
         let mut worst: Failure = None;
-        // Reference increment variance accumulated from epoch j+1 to k.
+        // Reference increment variance accumulated from epoch j+1 to k, and the
+        // largest velocity sigma over that span (the one at k may be small again right
+        // after the first fix that follows an outage).
         let mut ref_var = Vector3::zeros();
+        let mut vel_std = k.vel_std_ned_mps;
         let mut later = k;
         for (tj, j) in self.window.iter().rev().take(n) {
             ref_var += later.ref_increment_var_ned_m2;
+            vel_std = vel_std.sup(&later.vel_std_ned_mps);
             later = j;
             let dt = c.t - tj;
             let rho = if tau > 0.0 { (-dt / tau).exp() } else { 0.0 };
@@ -268,7 +277,7 @@ impl IntegrityMonitor {
             for a in 0..3 {
                 let (sk, sj) = (k.fix_std_ned_m[a], j.fix_std_ned_m[a]);
                 let var = sk * sk + sj * sj - 2.0 * rho * sk * sj
-                    + (k.vel_std_ned_mps[a] * dt).powi(2)
+                    + (vel_std[a] * dt).powi(2)
                     + ref_var[a];
                 stat += e[a] * e[a] / var.max(1e-6);
             }
@@ -422,7 +431,7 @@ mod tests {
     }
 
     #[test]
-    fn dead_reckoning_widens_the_distance_threshold_for_readmission() {
+    fn dead_reckoning_widens_the_distance_threshold() {
         let mut m = IntegrityMonitor::new(on());
         m.check(&ep(0.0, 30.0, 300.0));
         m.check(&ep(1.0, 30.0, 300.0));
@@ -436,9 +445,15 @@ mod tests {
             m.check(&drifted).transition.unwrap().to,
             IntegrityState::Recovering
         );
-        // While trusted the threshold is R.
+        // So it does when trusted (the first fix after an outage); a calibrated
+        // reference keeps R.
         let mut m = IntegrityMonitor::new(on());
-        assert!(!m.check(&drifted).use_gnss);
+        assert!(m.check(&drifted).use_gnss);
+        let calibrated = EpochCheck {
+            ref_pos_std_m: 1.0,
+            ..drifted
+        };
+        assert!(!m.check(&calibrated).use_gnss);
     }
 
     #[test]

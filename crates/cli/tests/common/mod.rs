@@ -1,6 +1,10 @@
 //! Helpers shared by the binary's integration tests.
 #![allow(dead_code)]
 
+use nalgebra::Vector3;
+use navfuse_core::earth::lla_diff_ned;
+use navfuse_io::nav::read_nav;
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -67,4 +71,21 @@ pub fn run(config: &Path, out: &Path) {
         out.to_str().unwrap(),
         "-q",
     ]);
+}
+
+/// Position error vectors NED [m] of `solution.nav` against `truth.nav` at the whole
+/// seconds `t0 .. t1` (both files hold those epochs).
+pub fn errors_ned(sol: &Path, truth: &Path, t0: f64, t1: f64) -> Vec<(f64, Vector3<f64>)> {
+    let key = |t: f64| (t * 100.0).round() as i64;
+    let truth: HashMap<i64, Vector3<f64>> = read_nav(truth)
+        .unwrap()
+        .into_iter()
+        .map(|(_, s)| (key(s.t), s.lla))
+        .collect();
+    read_nav(sol)
+        .unwrap()
+        .into_iter()
+        .filter(|(_, s)| s.t >= t0 - 1e-6 && s.t <= t1 + 1e-6 && (s.t - s.t.round()).abs() < 1e-6)
+        .map(|(_, s)| (s.t, lla_diff_ned(&s.lla, &truth[&key(s.t)])))
+        .collect()
 }
