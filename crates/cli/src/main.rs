@@ -153,7 +153,8 @@ enum Command {
         /// against the free dead reckoning): odo_dr_R (INS/odometer/NHC, R alone),
         /// ins_only_R (INS only, R alone), ins_only_chi2 (INS only, chi-square alone);
         /// dead_reckoning (GNSS removed over the attack), six_state_monitor (6-state
-        /// fusion + defaults against its prediction); prints alarms
+        /// fusion + defaults against its prediction), six_state_dead_reckoning (6-state
+        /// fusion, GNSS removed over the attack); prints alarms
         /// before the attack, detection delay and detector, maximum horizontal and 3D
         /// errors during the attack and in the 60 s after it, and the 3D RMSE, over
         /// --seeds seeds, beside the paper's statements.

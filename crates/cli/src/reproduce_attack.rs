@@ -194,16 +194,7 @@ fn variants() -> Vec<Variant> {
             apply: |c, sc| {
                 attack_start(c, sc);
                 odometer_nhc(c, sc);
-                if let Some((a, b)) = attack_window_rel(sc) {
-                    let t0 = sc.file.start.time_s;
-                    // Epochs strictly inside are withheld: the last fix used is
-                    // the one before the attack (the first spoofed one, at a, already
-                    // carries the false velocity), the next the true one at b.
-                    c.nav.gnss.outages.windows.push(Window {
-                        start: t0 + a - 0.5,
-                        end: t0 + b,
-                    });
-                }
+                withhold_gnss_over_attack(c, sc);
             },
         },
         // seed 004's 6-state fusion (`[gnss] fusion = "six_state"`, every fix):
@@ -218,7 +209,30 @@ fn variants() -> Vec<Variant> {
                 six_state_fusion(c);
             },
         },
+        Variant {
+            name: "six_state_dead_reckoning",
+            label: "the same 6-state fusion, GNSS removed over the attack (its drift bound)",
+            apply: |c, sc| {
+                attack_start(c, sc);
+                odometer_nhc(c, sc);
+                six_state_fusion(c);
+                withhold_gnss_over_attack(c, sc);
+            },
+        },
     ]
+}
+
+/// An outage over the attack: epochs strictly inside are withheld, so the last fix used
+/// is the one before the attack (the first spoofed one, at its start, already carries
+/// the false velocity) and the next the true one at its end.
+fn withhold_gnss_over_attack(c: &mut RunConfig, sc: &Scenario) {
+    if let Some((a, b)) = attack_window_rel(sc) {
+        let t0 = sc.file.start.time_s;
+        c.nav.gnss.outages.windows.push(Window {
+            start: t0 + a - 0.5,
+            end: t0 + b,
+        });
+    }
 }
 
 // ---------------------------------------------------------------------------------

@@ -248,6 +248,19 @@ fn attack_bounded_by_dead_reckoning_and_ins_only_reference() {
         assert!(open[k] > 300.0, "seed {k}: no monitor only {} m", open[k]);
     }
     assert!(metric("monitor", "alarms_before").iter().all(|&a| a == 0.0));
+    // Seed 004's 6-state fusion with the monitor (chi-square with the fix velocity)
+    // stays within that architecture's own drift bound.
+    let six = metric("six_state_monitor", "max_h_attack_m");
+    let six_bound = metric("six_state_dead_reckoning", "max_h_attack_m");
+    eprintln!("6-state fusion, max horizontal error in the attack: monitor {six:?}, dead reckoning {six_bound:?}");
+    for k in 0..six.len() {
+        assert!(
+            six[k] <= six_bound[k] + 0.5,
+            "seed {k}: 6-state monitor {} m, its bound {} m",
+            six[k],
+            six_bound[k]
+        );
+    }
     let r_alarms = metric("ins_only_R", "alarms_before");
     let chi2_alarms = metric("ins_only_chi2", "alarms_before");
     eprintln!(

@@ -836,38 +836,49 @@ impl Navigator {
         }
         let dr_increment_var_ned_m2 = six.predict_covariance_from_dr(&self.filter.p);
         if self.monitor.is_some() {
-            // The fix against the six-state prediction, or against the dead reckoning
-            // itself (seed 004's r_INS/OD, which GNSS never corrects): distance and
-            // 3-dof NIS. The displacement window is against the dead reckoning.
-            let (y, s_mat) = match self.cfg.integrity.reference {
-                IntegrityReference::Prediction => six.position_innovation(&imu_fix),
+            // The fix against the six-state prediction (position and, when the fix has
+            // one, velocity), or against the dead reckoning itself (seed 004's
+            // r_INS/OD, which GNSS never corrects; position only): distance and NIS.
+            // The displacement window is against the dead reckoning.
+            let pos_var = imu_fix.pos_std_ned_m.map(|x| x * x);
+            let innovation = match self.cfg.integrity.reference {
+                IntegrityReference::Prediction => six.innovation(&imu_fix),
                 IntegrityReference::DeadReckoning => {
                     let p_rr = self.filter.p.fixed_view::<3, 3>(POS, POS).into_owned();
-                    let r = Matrix3::from_diagonal(&imu_fix.pos_std_ned_m.map(|x| x * x));
-                    (lla_diff_ned(&imu_fix.lla, &self.nav.lla), p_rr + r)
+                    let y = lla_diff_ned(&imu_fix.lla, &self.nav.lla);
+                    let s = p_rr + Matrix3::from_diagonal(&pos_var);
+                    Some((
+                        DVector::from_column_slice(y.as_slice()),
+                        DMatrix::from_column_slice(3, 3, s.as_slice()),
+                    ))
                 }
             };
-            let nis = s_mat.cholesky().map_or(f64::NAN, |c| y.dot(&c.solve(&y)));
-            let check = EpochCheck {
-                t: fix.t,
-                distance_m: y.xy().norm(),
-                nis,
-                dof: 3,
-                distance_floor_m: 0.0,
-                ref_pos_std_m: (s_mat.trace() - imu_fix.pos_std_ned_m.map(|x| x * x).sum())
-                    .max(0.0)
-                    .sqrt(),
-                step: Some(StepInput {
-                    innovation_ned_m: lla_diff_ned(&self.nav.lla, &imu_fix.lla),
-                    fix_std_ned_m: imu_fix.pos_std_ned_m,
-                    vel_std_ned_mps: self.vel_std_ned_mps(),
-                    gnss_correction_ned_m: Vector3::zeros(),
-                    ref_increment_var_ned_m2: dr_increment_var_ned_m2,
-                }),
-            };
-            if !self.monitor_verdict(&check).use_gnss {
-                self.summary.gnss_rejected += 1;
-                return;
+            // A fix that is not finite goes on to the update, which reports it.
+            if let Some((y, s_mat)) = innovation {
+                let nis = s_mat
+                    .clone()
+                    .cholesky()
+                    .map_or(f64::NAN, |c| y.dot(&c.solve(&y)));
+                let ref_pos_var: f64 = (0..3).map(|k| s_mat[(k, k)] - pos_var[k]).sum();
+                let check = EpochCheck {
+                    t: fix.t,
+                    distance_m: y.rows(0, 2).norm(),
+                    nis,
+                    dof: y.len(),
+                    distance_floor_m: 0.0,
+                    ref_pos_std_m: ref_pos_var.max(0.0).sqrt(),
+                    step: Some(StepInput {
+                        innovation_ned_m: lla_diff_ned(&self.nav.lla, &imu_fix.lla),
+                        fix_std_ned_m: imu_fix.pos_std_ned_m,
+                        vel_std_ned_mps: self.vel_std_ned_mps(),
+                        gnss_correction_ned_m: Vector3::zeros(),
+                        ref_increment_var_ned_m2: dr_increment_var_ned_m2,
+                    }),
+                };
+                if !self.monitor_verdict(&check).use_gnss {
+                    self.summary.gnss_rejected += 1;
+                    return;
+                }
             }
         }
         let Some(six) = self.six_state.as_mut() else {

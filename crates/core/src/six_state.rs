@@ -48,7 +48,7 @@
 
 use crate::earth::{lla_add_ned, omega_en_n, omega_ie_n, radii};
 use crate::types::{GnssFix, NavState};
-use nalgebra::{DMatrix, Matrix3, Matrix6, Vector3, Vector6};
+use nalgebra::{DMatrix, DVector, Matrix3, Matrix6, Vector3, Vector6};
 use std::num::NonZeroU32;
 
 /// A GNSS fix moved from the antenna to the IMU centre (what H = I maps onto).
@@ -323,15 +323,46 @@ impl SixState {
         self.p = 0.5 * (p + p.transpose());
     }
 
-    /// Position innovation of `fix` against the current prediction, for an integrity
-    /// test: y = r_GNSS,IMU - r (NED [m], measurement minus prediction) and its
-    /// covariance S = P_rr + R_pos (3 x 3). Distance test: |y|; NIS: y^T S^-1 y with
-    /// 3 dof. Call after [`SixState::follow_dr`] for the fix time.
-    pub fn position_innovation(&self, fix: &ImuFix) -> (Vector3<f64>, Matrix3<f64>) {
-        let y = ned_between(&fix.lla, &self.lla);
-        let r = Matrix3::from_diagonal(&fix.pos_std_ned_m.map(|s| s * s));
-        let s = self.p.fixed_view::<3, 3>(0, 0).into_owned() + r;
-        (y, s)
+    /// Innovation of `fix` against the current prediction, for an integrity test:
+    /// y = z - H x (position NED [m], then velocity NED [m/s] when the fix has one)
+    /// and its covariance S = H P H^T + R (3 x 3 or 6 x 6). Distance test: |y_pos|;
+    /// NIS: y^T S^-1 y with y.len() dof. None for a fix that is not finite. Call
+    /// after [`SixState::follow_dr`] for the fix time.
+    pub fn innovation(&self, fix: &ImuFix) -> Option<(DVector<f64>, DMatrix<f64>)> {
+        let (y, r) = self.measurement(fix)?;
+        let dof = y.len();
+        let p = DMatrix::from_column_slice(6, 6, self.p.as_slice());
+        Some((y, p.view((0, 0), (dof, dof)).into_owned() + r))
+    }
+
+    /// y = z - H x and R for `fix` (H = I_6, or I_3 without a velocity); None when the
+    /// fix is not finite or its stds are not positive.
+    fn measurement(&self, fix: &ImuFix) -> Option<(DVector<f64>, DMatrix<f64>)> {
+        let finite3 = |v: &Vector3<f64>| v.iter().all(|x| x.is_finite());
+        let std_ok = |s: &Vector3<f64>| s.iter().all(|x| x.is_finite() && *x > 0.0);
+        if !(finite3(&fix.lla) && std_ok(&fix.pos_std_ned_m)) {
+            return None;
+        }
+        let vel = match (fix.vel_ned_mps, fix.vel_std_ned_mps) {
+            (Some(v), Some(s)) if finite3(&v) && std_ok(&s) => Some((v, s)),
+            _ => None,
+        };
+        let dof = if vel.is_some() { 6 } else { 3 };
+        // z - H x (SYSTEM.md §2 update; H = I).
+        let mut y = DVector::<f64>::zeros(dof);
+        let mut r = DMatrix::<f64>::zeros(dof, dof);
+        let y_pos_m = ned_between(&fix.lla, &self.lla);
+        for i in 0..3 {
+            y[i] = y_pos_m[i];
+            r[(i, i)] = fix.pos_std_ned_m[i].powi(2);
+        }
+        if let Some((v, s)) = vel {
+            for i in 0..3 {
+                y[3 + i] = v[i] - self.v_ned_mps[i];
+                r[(3 + i, 3 + i)] = s[i].powi(2);
+            }
+        }
+        Some((y, r))
     }
 
     /// True when the next epoch offered to [`SixState::update`] will be fused (not
@@ -355,30 +386,10 @@ impl SixState {
 
     /// The measurement update itself, without the every-N cadence.
     fn fuse(&mut self, fix: &ImuFix, gate: Option<f64>) -> SixStateOutcome {
-        let finite3 = |v: &Vector3<f64>| v.iter().all(|x| x.is_finite());
-        let std_ok = |s: &Vector3<f64>| s.iter().all(|x| x.is_finite() && *x > 0.0);
-        if !(finite3(&fix.lla) && std_ok(&fix.pos_std_ned_m)) {
+        let Some((y, r)) = self.measurement(fix) else {
             return SixStateOutcome::Invalid;
-        }
-        let vel = match (fix.vel_ned_mps, fix.vel_std_ned_mps) {
-            (Some(v), Some(s)) if finite3(&v) && std_ok(&s) => Some((v, s)),
-            _ => None,
         };
-        let dof = if vel.is_some() { 6 } else { 3 };
-        // z - H x (SYSTEM.md §2 update; H = I).
-        let mut y = DMatrix::<f64>::zeros(dof, 1);
-        let mut r = DMatrix::<f64>::zeros(dof, dof);
-        let y_pos_m = ned_between(&fix.lla, &self.lla);
-        for i in 0..3 {
-            y[i] = y_pos_m[i];
-            r[(i, i)] = fix.pos_std_ned_m[i].powi(2);
-        }
-        if let Some((v, s)) = vel {
-            for i in 0..3 {
-                y[3 + i] = v[i] - self.v_ned_mps[i];
-                r[(3 + i, 3 + i)] = s[i].powi(2);
-            }
-        }
+        let dof = y.len();
         let p = DMatrix::from_column_slice(6, 6, self.p.as_slice());
         let h = DMatrix::<f64>::identity(dof, 6);
         let ph_t = &p * h.transpose();
@@ -676,13 +687,13 @@ mod tests {
     /// The gate rejects a 100 m outlier and leaves the state alone; the innovation
     /// exposed for the integrity monitor matches it.
     #[test]
-    fn gate_and_position_innovation() {
+    fn gate_and_innovation() {
         let dr = dr_at(0.0, LLA0, Vector3::zeros());
         let mut f = SixState::new(&dr, p0(1.0, 0.1), one()).unwrap();
         let far = lla_add_ned(&LLA0, &Vector3::new(0.0, 100.0, 0.0));
         let fx = fix_at(0.0, far, None);
-        let (y, s) = f.position_innovation(&fx);
-        assert!((y - Vector3::new(0.0, 100.0, 0.0)).norm() < 1e-6);
+        let (y, s) = f.innovation(&fx).unwrap();
+        assert!((y - DVector::from_column_slice(&[0.0, 100.0, 0.0])).norm() < 1e-6);
         assert!((s[(1, 1)] - (1.0 + 2.25)).abs() < 1e-12);
         let gate = crate::filter::chi2_threshold(3, 1e-4);
         match f.update(&fx, Some(gate)) {
