@@ -234,33 +234,34 @@ fn attack_bounded_by_dead_reckoning_and_ins_only_reference() {
             .map(|x| x.as_f64().unwrap_or(f64::NAN))
             .collect()
     };
-    let monitor = metric("monitor", "max_h_attack_m");
-    let bound = metric("dead_reckoning", "max_h_attack_m");
-    let open = metric("no_monitor", "max_h_attack_m");
-    eprintln!("max horizontal error in the attack: monitor {monitor:?}, dead reckoning {bound:?}, no monitor {open:?}");
-    for k in 0..monitor.len() {
-        assert!(
-            monitor[k] <= bound[k] + 0.5,
-            "seed {k}: monitor {} m, bound {} m",
-            monitor[k],
-            bound[k]
+    // Per seed, the monitored variant's max horizontal error in the attack is within
+    // its dead-reckoning bound (GNSS removed over the attack) + 0.5 m.
+    let within_bound = |monitored: &str, bound: &str| {
+        let (m, b) = (
+            metric(monitored, "max_h_attack_m"),
+            metric(bound, "max_h_attack_m"),
         );
-        assert!(open[k] > 300.0, "seed {k}: no monitor only {} m", open[k]);
-    }
-    assert!(metric("monitor", "alarms_before").iter().all(|&a| a == 0.0));
+        eprintln!("max horizontal error in the attack: {monitored} {m:?}, {bound} {b:?}");
+        for k in 0..m.len() {
+            assert!(
+                m[k] <= b[k] + 0.5,
+                "seed {k}: {monitored} {} m, {bound} {} m",
+                m[k],
+                b[k]
+            );
+        }
+    };
+    within_bound("monitor", "dead_reckoning");
     // Seed 004's 6-state fusion with the monitor (chi-square with the fix velocity)
-    // stays within that architecture's own drift bound.
-    let six = metric("six_state_monitor", "max_h_attack_m");
-    let six_bound = metric("six_state_dead_reckoning", "max_h_attack_m");
-    eprintln!("6-state fusion, max horizontal error in the attack: monitor {six:?}, dead reckoning {six_bound:?}");
-    for k in 0..six.len() {
-        assert!(
-            six[k] <= six_bound[k] + 0.5,
-            "seed {k}: 6-state monitor {} m, its bound {} m",
-            six[k],
-            six_bound[k]
-        );
-    }
+    // stays within that architecture's own (poor) bound.
+    within_bound("six_state_monitor", "six_state_dead_reckoning");
+    let open = metric("no_monitor", "max_h_attack_m");
+    eprintln!("no monitor: {open:?}");
+    assert!(
+        open.iter().all(|&h| h > 300.0),
+        "no monitor only {open:?} m"
+    );
+    assert!(metric("monitor", "alarms_before").iter().all(|&a| a == 0.0));
     let r_alarms = metric("ins_only_R", "alarms_before");
     let chi2_alarms = metric("ins_only_chi2", "alarms_before");
     eprintln!(
