@@ -40,8 +40,14 @@ fn attacked_run(
     std::fs::write(sim.join("run_monitor.toml"), cfg_text).unwrap();
     let out = dir.join("out");
     run(&sim.join("run_monitor.toml"), &out);
-    let csv = std::fs::read_to_string(out.join("integrity.csv")).unwrap();
+    let tr = integrity_transitions(&out);
     let _ = std::fs::remove_dir_all(&dir);
+    tr
+}
+
+/// A run's integrity.csv as (t - T0, to, detector).
+fn integrity_transitions(out: &std::path::Path) -> Vec<(f64, String, String)> {
+    let csv = std::fs::read_to_string(out.join("integrity.csv")).unwrap();
     csv.lines()
         .skip(1)
         .map(|l| {
@@ -305,18 +311,17 @@ fn tight_coupling_attack_held_by_odometer_reference() {
         .replace("position_std_m = 0.01\n", "position_std_m = 30\n");
     assert!(cfg.contains("coupling = \"tight\"") && cfg.contains("position_std_m = 30\n"));
     let (attack_start, attack_end) = (ATTACK_START_S, 450.0);
-    // The dead-reckoning bound withholds GNSS over the attack.
-    let nhc = "\n[nhc]\nmode = \"always\"\n";
+    // (name, monitor on, GNSS withheld over the attack: the dead-reckoning bound).
     let variants = [
-        ("monitor", format!("{nhc}\n[spoofing]\n")),
-        ("no_monitor", nhc.to_string()),
-        ("dead_reckoning", nhc.to_string()),
+        ("monitor", true, false),
+        ("no_monitor", false, false),
+        ("dead_reckoning", false, true),
     ];
     let mut max_attack = std::collections::HashMap::new();
     let mut end_error = std::collections::HashMap::new();
-    for (name, extra) in &variants {
+    for (name, monitor, withhold) in variants {
         let mut text = cfg.clone();
-        if *name == "dead_reckoning" {
+        if withhold {
             text = text.replace(
                 "[gnss]\n",
                 &format!(
@@ -326,7 +331,10 @@ fn tight_coupling_attack_held_by_odometer_reference() {
                 ),
             );
         }
-        text.push_str(extra);
+        text.push_str("\n[nhc]\nmode = \"always\"\n");
+        if monitor {
+            text.push_str("\n[spoofing]\n");
+        }
         let path = sim.join(format!("run_{name}.toml"));
         std::fs::write(&path, text).unwrap();
         let out = dir.join(name);
@@ -345,27 +353,18 @@ fn tight_coupling_attack_held_by_odometer_reference() {
             .filter(|(t, _)| *t >= attack_start && *t <= attack_end)
             .map(|(_, h)| *h)
             .fold(0.0, f64::max);
-        max_attack.insert(*name, m);
-        end_error.insert(*name, e.last().unwrap().1);
-        if *name == "monitor" {
-            let csv = std::fs::read_to_string(out.join("integrity.csv")).unwrap();
-            let tr: Vec<(f64, String)> = csv
-                .lines()
-                .skip(1)
-                .map(|l| {
-                    let f: Vec<&str> = l.split(',').collect();
-                    (f[0].parse::<f64>().unwrap() - T0, f[2].to_string())
-                })
-                .collect();
+        max_attack.insert(name, m);
+        end_error.insert(name, e.last().unwrap().1);
+        if monitor {
+            let tr = integrity_transitions(&out);
             eprintln!("tight attack, monitor transitions: {tr:?}");
+            let (first, early) = detection(&tr);
+            assert!(!early, "alarm before the attack: {tr:?}");
+            let delay = first.expect("attack not detected").0;
+            assert!(delay <= 1.0, "detected after {delay} s");
             assert!(
-                tr.iter().all(|(t, _)| *t >= attack_start),
-                "alarm before the attack: {tr:?}"
-            );
-            let first = tr.first().expect("attack not detected");
-            assert!(first.0 <= attack_start + 1.0, "detected at {} s", first.0);
-            assert!(
-                tr.iter().any(|(t, to)| *t > attack_end && to == "trusted"),
+                tr.iter()
+                    .any(|(t, to, _)| *t > attack_end && to == "trusted"),
                 "GNSS not re-admitted after the attack: {tr:?}"
             );
         }

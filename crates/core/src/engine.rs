@@ -24,7 +24,6 @@ use crate::error_model::{fill_f, fill_qc, Discretizer, MeanMotion};
 use crate::filter::{chi2_threshold, Eskf, UpdateOutcome};
 use crate::integrity::{
     EpochCheck, IntegrityMonitor, IntegrityReference, IntegrityState, StepInput, Transition,
-    Verdict,
 };
 use crate::mechanization::Mechanizer;
 use crate::six_state::{ImuFix, SixState, SixStateOutcome};
@@ -53,7 +52,7 @@ pub enum Event {
     /// Tight coupling: no pseudorange had been fused for `gap_s` seconds (outage,
     /// rejection streak, or dead reckoning under the integrity monitor); the single
     /// point fix was fused without the gate before the pseudoranges.
-    TightReset { t: f64, gap_s: f64 },
+    TightFixUngated { t: f64, gap_s: f64 },
     /// How the initial attitude was found.
     Aligned {
         t: f64,
@@ -92,7 +91,7 @@ impl std::fmt::Display for Event {
                 f,
                 "{t:.3} gnss fix used without the gate: fixes rejected for {streak_s:.1} s (gate timeout)"
             ),
-            Event::TightReset { t, gap_s } => write!(
+            Event::TightFixUngated { t, gap_s } => write!(
                 f,
                 "{t:.3} single point fix used without the gate: no pseudorange used for {gap_s:.1} s (gate timeout)"
             ),
@@ -755,7 +754,7 @@ impl Navigator {
             if use_vel && f.vel_ned.is_some() {
                 rows.push(Aiding::GnssVelocity(&f));
             }
-            if !self.integrity_check(fix.t, &rows, Some(pos), 0.0).use_gnss {
+            if !self.integrity_check(fix.t, &rows, Some(pos), 0.0) {
                 self.summary.gnss_rejected += 1;
                 return;
             }
@@ -875,7 +874,7 @@ impl Navigator {
                         ref_increment_var_ned_m2: dr_increment_var_ned_m2,
                     }),
                 };
-                if !self.monitor_verdict(&check).use_gnss {
+                if !self.monitor_verdict(&check) {
                     self.summary.gnss_rejected += 1;
                     return;
                 }
@@ -980,8 +979,7 @@ impl Navigator {
             // The single point fix is noisier than a receiver's filtered fix: the
             // distance threshold is at least its 3-sigma.
             let floor = epoch.fix.as_ref().map_or(0.0, |f| 3.0 * f.std_ned.norm());
-            let verdict = self.integrity_check(epoch.t, &prs, fix_pos, floor);
-            if !verdict.use_gnss {
+            if !self.integrity_check(epoch.t, &prs, fix_pos, floor) {
                 // Nothing of this epoch is used; carrier differencing restarts.
                 self.tight.prev_t = None;
                 self.summary.gnss_rejected += 1;
@@ -1000,7 +998,7 @@ impl Navigator {
         ) {
             if epoch.t - t0 >= self.cfg.gnss.gate_timeout_s {
                 self.fuse_fix_ungated(fix);
-                self.summary.events.push(Event::TightReset {
+                self.summary.events.push(Event::TightFixUngated {
                     t: epoch.t,
                     gap_s: epoch.t - t0,
                 });
@@ -1181,7 +1179,7 @@ impl Navigator {
         nis_rows: &[Aiding],
         distance_row: Option<Aiding>,
         distance_floor_m: f64,
-    ) -> Verdict {
+    ) -> bool {
         self.flush_covariance();
         let ctx = self.context(self.tight.clock);
         let stack = |list: &[Aiding]| {
@@ -1190,10 +1188,7 @@ impl Navigator {
         };
         let dist_lin = distance_row.and_then(|a| stack(&[a]));
         let Some(lin) = stack(nis_rows) else {
-            return Verdict {
-                use_gnss: true,
-                transition: None,
-            };
+            return true;
         };
         let nis = self.filter.nis(&lin.y, &lin.h, &lin.r).unwrap_or(f64::NAN);
         let vel_std_ned_mps = self.vel_std_ned_mps();
@@ -1228,14 +1223,14 @@ impl Navigator {
         Vector3::from_fn(|k, _| self.filter.std(VEL + k))
     }
 
-    /// Feed one epoch to the monitor and log its transition.
-    fn monitor_verdict(&mut self, check: &EpochCheck) -> Verdict {
+    /// Feed one epoch to the monitor, log its transition; true if GNSS may be fused.
+    fn monitor_verdict(&mut self, check: &EpochCheck) -> bool {
         let monitor = self.monitor.as_mut().expect("monitor enabled");
         let v = monitor.check(check);
         if let Some(tr) = v.transition {
             self.summary.events.push(Event::Integrity(tr));
         }
-        v
+        v.use_gnss
     }
 
     /// Integrity state of the GNSS (trusted when no monitor runs).
