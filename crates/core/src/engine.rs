@@ -29,6 +29,7 @@ use crate::mechanization::Mechanizer;
 use crate::six_state::{ImuFix, SixState, SixStateOutcome};
 use crate::state::{Block, StateLayout, ATT, BA, BG, N_INS, POS, SA, SG, VEL};
 use crate::static_detect::StaticDetector;
+use crate::timeline::{effective_time, Due, Inbox, IntervalRest};
 use crate::types::{
     GnssFix, GnssRawEpoch, HeadingObs, ImuErrors, ImuSample, Measurement, NavState, SatMeasurement,
 };
@@ -227,6 +228,8 @@ pub struct Navigator {
     gnss_correction_ned_m: Vector3<f64>,
     /// A GNSS update is being fused (its feedback goes to `gnss_correction_ned_m`).
     in_gnss_update: bool,
+    /// Sums of the raw IMU increments integrated so far (dt, dtheta, dvel).
+    integrated: (f64, Vector3<f64>, Vector3<f64>),
     summary: RunSummary,
 }
 
@@ -395,6 +398,7 @@ impl Navigator {
             six_state_out: nav,
             gnss_correction_ned_m: Vector3::zeros(),
             in_gnss_update: false,
+            integrated: (0.0, Vector3::zeros(), Vector3::zeros()),
             summary: RunSummary {
                 first_t: t0,
                 last_t: t0,
@@ -469,12 +473,20 @@ impl Navigator {
         s
     }
 
+    /// Sums of the raw IMU increments integrated so far: (dt [s], dtheta [rad],
+    /// dvel [m/s]), body frame.
+    pub fn integrated(&self) -> (f64, Vector3<f64>, Vector3<f64>) {
+        self.integrated
+    }
+
     pub fn summary(&self) -> &RunSummary {
         &self.summary
     }
 
     /// Advance over one raw IMU interval.
     pub fn propagate(&mut self, raw: &ImuSample) {
+        let sum = &mut self.integrated;
+        *sum = (sum.0 + raw.dt, sum.1 + raw.dtheta, sum.2 + raw.dvel);
         let s = self.imu_errors.compensate(raw);
         // The offset line tau0 + rate (t - t0) follows elapsed time (after an IMU gap
         // the interval's dt is shorter than the time that passed).
@@ -1751,27 +1763,17 @@ pub fn run<E: From<NavError>>(
             start.rpy.z.to_degrees(),
         ],
     });
-    let mut mi = 0usize;
     // Inputs up to the initial epoch are not used.
+    let mut inbox = Inbox::new(measurements, &cfg.gnss.outages);
     let t_start = start.t0;
-    while mi < measurements.len() && {
-        let m = &measurements[mi];
-        let t_eff = m.t()
-            + if m.on_gnss_clock() {
-                n.time_offset()
-            } else {
-                0.0
-            };
-        t_eff <= t_start || (m.on_gnss_clock() && m.t() <= start.used_until)
-    } {
-        if matches!(
-            measurements[mi],
-            Measurement::Gnss(_) | Measurement::GnssRaw(_)
-        ) {
-            n.summary.gnss_before_start += 1;
-        }
-        mi += 1;
-    }
+    let offset0 = n.time_offset();
+    let before = inbox.skip_while(|m| {
+        effective_time(m, offset0) <= t_start || (m.on_gnss_clock() && m.t() <= start.used_until)
+    });
+    n.summary.gnss_before_start += before
+        .iter()
+        .filter(|m| matches!(m, Measurement::Gnss(_) | Measurement::GnssRaw(_)))
+        .count();
     let mut t_prev = t_start - n.time_offset();
     let period = output_period_s.filter(|p| *p > 0.0);
     for item in start.replay.into_iter().map(Ok).chain(imu) {
@@ -1779,52 +1781,25 @@ pub fn run<E: From<NavError>>(
         if s.t > end {
             break;
         }
-        let mut rest = s;
-        while mi < measurements.len() {
-            let m = &measurements[mi];
-            let t_m = m.t()
-                + if m.on_gnss_clock() {
-                    n.time_offset()
-                } else {
-                    0.0
-                };
-            if t_m > s.t {
-                break;
-            }
-            mi += 1;
-            if m.on_gnss_clock() && cfg.gnss.outages.contains(m.t()) {
-                if matches!(m, Measurement::Gnss(_) | Measurement::GnssRaw(_)) {
-                    n.summary.gnss_in_outage += 1;
+        // Each measurement due in (t_k - dt, t_k]: integrate up to its time, apply it.
+        let mut rest = IntervalRest::new(s);
+        while let Some(due) = inbox.next_due(s.t, n.time_offset()) {
+            match due {
+                Due::Withheld(m) => {
+                    if matches!(m, Measurement::Gnss(_) | Measurement::GnssRaw(_)) {
+                        n.summary.gnss_in_outage += 1;
+                    }
                 }
-                continue;
+                Due::Apply { m, t_eff } => {
+                    if let Some(piece) = rest.cut_until(t_eff) {
+                        n.propagate(&piece);
+                    }
+                    n.apply(m);
+                }
             }
-            // Split the interval at the epoch unless it coincides with an end.
-            let t_begin = rest.t - rest.dt;
-            if t_m > t_begin + 1e-9 && t_m < rest.t - 1e-9 {
-                let lambda = (t_m - t_begin) / rest.dt;
-                let first = ImuSample {
-                    t: t_m,
-                    dt: rest.dt * lambda,
-                    dtheta: rest.dtheta * lambda,
-                    dvel: rest.dvel * lambda,
-                };
-                n.propagate(&first);
-                rest = ImuSample {
-                    t: rest.t,
-                    dt: rest.dt - first.dt,
-                    dtheta: rest.dtheta - first.dtheta,
-                    dvel: rest.dvel - first.dvel,
-                };
-            } else if t_m >= rest.t - 1e-9 {
-                n.propagate(&rest);
-                rest.dt = 0.0;
-            }
-            // Otherwise at or before the start of this interval (e.g. after the time
-            // offset estimate moved): apply now.
-            n.apply(m);
         }
-        if rest.dt > 0.0 {
-            n.propagate(&rest);
+        if let Some(piece) = rest.take_rest() {
+            n.propagate(&piece);
         }
         n.apply_constraints();
         n.summary.imu_samples += 1;
@@ -2005,6 +1980,122 @@ mod tests {
         // Output at every IMU epoch of the input (the split point is not an output).
         assert_eq!(ta.len(), 100);
         assert_eq!(tb.len(), 101);
+    }
+
+    /// Random GNSS, odometer and heading times on, within 1e-12..1e-6 s of, and between
+    /// IMU samples, with duplicates and equal times across sources: every increment of
+    /// the file is integrated exactly once, and shifting every measurement by 1 us moves
+    /// the trajectory by less than 1 mm (issue 15, finding 1: the second measurement at
+    /// an IMU sample integrated the interval's increments again).
+    #[test]
+    fn each_increment_is_integrated_once_whatever_the_measurement_times() {
+        use rand::{RngExt, SeedableRng};
+        let mut c = cfg();
+        c.odometer.enabled = true;
+        c.heading.baseline_b = Some(Vector3::new(1.0, 0.0, 0.0));
+        let dt = 0.01;
+        let n_imu = 600;
+        let imu: Vec<ImuSample> = (0..=n_imu)
+            .map(|k| static_sample(&c, k as f64 * dt, dt))
+            .collect();
+        let lla = c.initial.lla.unwrap();
+        let AttitudeInit::Given(rpy) = c.initial.attitude else {
+            unreachable!()
+        };
+        let ant = lla_add_ned(&lla, &(c_bn_from_euler(&rpy) * c.gnss.lever_arm_b));
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(1);
+        for case in 0..12 {
+            let mut times: Vec<f64> = (0..40)
+                .map(|_| {
+                    let k = rng.random_range(1..n_imu) as f64 * dt;
+                    match rng.random_range(0..4) {
+                        0 => k,
+                        1 => k + 10f64.powf(rng.random_range(-12.0..-6.0)),
+                        2 => k - 10f64.powf(rng.random_range(-12.0..-6.0)),
+                        _ => k + rng.random::<f64>() * dt,
+                    }
+                })
+                .collect();
+            let dup: Vec<f64> = times.iter().step_by(3).copied().collect();
+            times.extend(dup);
+            times.sort_by(f64::total_cmp);
+            let run_with = |shift: f64| {
+                let fixes: Vec<GnssFix> = times
+                    .iter()
+                    .step_by(2)
+                    .map(|&t| GnssFix {
+                        t: t + shift,
+                        lla: ant,
+                        std_ned: Vector3::repeat(0.5),
+                        vel_ned: None,
+                        vel_std_ned: None,
+                    })
+                    .collect();
+                let odo: Vec<crate::types::OdometerSample> = times
+                    .iter()
+                    .skip(1)
+                    .step_by(2)
+                    .map(|&t| crate::types::OdometerSample {
+                        t: t + shift,
+                        speed_mps: 0.0,
+                        interval_s: 0.0,
+                    })
+                    .collect();
+                let heading: Vec<HeadingObs> = times
+                    .iter()
+                    .step_by(5)
+                    .map(|&t| HeadingObs {
+                        t: t + shift,
+                        heading_rad: rpy.z,
+                        std_rad: 0.01,
+                    })
+                    .collect();
+                let meas = crate::types::merge_measurements(&fixes, &odo, &heading);
+                let mut track = Vec::new();
+                let mut integrated = None;
+                run::<NavError>(
+                    &c,
+                    imu.iter().map(|s| Ok(*s)),
+                    &meas,
+                    None,
+                    |n| {
+                        track.push(n.nav().lla);
+                        integrated = Some(n.integrated());
+                        Ok(())
+                    },
+                    |_| {},
+                )
+                .unwrap();
+                (track, integrated.unwrap())
+            };
+            let (a, sum) = run_with(0.0);
+            let (b, _) = run_with(1e-6);
+            // The first sample fixes the initial epoch; the others are integrated.
+            let file = imu[1..]
+                .iter()
+                .fold((0.0, Vector3::zeros(), Vector3::zeros()), |s, x| {
+                    (s.0 + x.dt, s.1 + x.dtheta, s.2 + x.dvel)
+                });
+            let tol = 1e-12;
+            assert!(
+                (sum.0 - file.0).abs() < tol * file.0,
+                "case {case}: dt {} vs {}",
+                sum.0,
+                file.0
+            );
+            assert!((sum.1 - file.1).norm() < tol * file.1.norm(), "case {case}");
+            assert!((sum.2 - file.2).norm() < tol * file.2.norm(), "case {case}");
+            let worst = a
+                .iter()
+                .zip(&b)
+                .map(|(p, q)| crate::earth::lla_diff_ned(p, q).norm())
+                .fold(0.0, f64::max);
+            assert_eq!(a.len(), b.len());
+            assert!(
+                worst < 1e-3,
+                "case {case}: {worst} m from the 1 us shifted run"
+            );
+        }
     }
 
     /// An IMU stream in the wrong units drives the state to infinity: the run stops with

@@ -21,6 +21,7 @@ pub mod outage;
 pub mod six_state;
 pub mod state;
 pub mod static_detect;
+pub mod timeline;
 pub mod types;
 
 pub use engine::{run, Navigator, RunSummary};

@@ -1,0 +1,214 @@
+//! The time line: which measurement is due when, and how an IMU interval is cut at
+//! the measurement times inside it so that each increment is integrated exactly once.
+//!
+//! Rules (docs/ALGORITHMS.md, "Time line"):
+//! - A measurement is applied when the navigator has reached its time of validity:
+//!   the IMU interval (t_k - dt, t_k] holding it is integrated up to that time, the
+//!   measurement is applied, and integration continues from there.
+//! - Times within [`SNAP_S`] of the time already reached, or of the interval's end,
+//!   are taken as that time (no sliver of an interval is integrated).
+//! - Measurements at equal times are applied in the order of the merged list
+//!   (`merge_measurements`: GNSS, then odometer, then heading); the second one at a
+//!   time integrates nothing.
+//! - A measurement whose time is already behind the navigator (possible when the
+//!   GNSS-IMU time offset estimate moves) is applied at once.
+
+use crate::outage::OutageSchedule;
+use crate::types::{ImuSample, Measurement};
+
+/// Times closer than this to the time reached or to an interval end are taken as
+/// equal to it [s].
+pub const SNAP_S: f64 = 1e-9;
+
+/// The part of one IMU interval not yet integrated: (t_reached, end.t].
+#[derive(Clone, Copy, Debug)]
+pub struct IntervalRest {
+    rest: ImuSample,
+}
+
+impl IntervalRest {
+    pub fn new(sample: ImuSample) -> Self {
+        IntervalRest { rest: sample }
+    }
+
+    /// Time up to which the interval has been integrated [s].
+    pub fn t_reached(&self) -> f64 {
+        self.rest.t - self.rest.dt
+    }
+
+    /// The piece to integrate to reach `t` (the whole rest when `t` is at or after the
+    /// interval's end); `None` when `t` is not after the time reached.
+    pub fn cut_until(&mut self, t: f64) -> Option<ImuSample> {
+        let r = self.rest;
+        if r.dt <= 0.0 || t <= self.t_reached() + SNAP_S {
+            return None;
+        }
+        if t >= r.t - SNAP_S {
+            return self.take_rest();
+        }
+        // Linear share of the increments (constant rate inside the interval).
+        let lambda = (t - self.t_reached()) / r.dt;
+        let piece = ImuSample {
+            t,
+            dt: r.dt * lambda,
+            dtheta: r.dtheta * lambda,
+            dvel: r.dvel * lambda,
+        };
+        self.rest = ImuSample {
+            t: r.t,
+            dt: r.dt - piece.dt,
+            dtheta: r.dtheta - piece.dtheta,
+            dvel: r.dvel - piece.dvel,
+        };
+        Some(piece)
+    }
+
+    /// Whatever is left of the interval; afterwards nothing is.
+    pub fn take_rest(&mut self) -> Option<ImuSample> {
+        let r = self.rest;
+        self.rest.dt = 0.0;
+        self.rest.dtheta = Default::default();
+        self.rest.dvel = Default::default();
+        (r.dt > 0.0).then_some(r)
+    }
+}
+
+/// What the inbox hands over next.
+#[derive(Debug)]
+pub enum Due<'a> {
+    /// Apply at `t_eff` (IMU time scale).
+    Apply { m: &'a Measurement, t_eff: f64 },
+    /// Inside a configured GNSS outage: not applied.
+    Withheld(&'a Measurement),
+}
+
+/// The merged, time-sorted measurements, handed over as the IMU time line reaches them.
+#[derive(Debug)]
+pub struct Inbox<'a> {
+    meas: &'a [Measurement],
+    next: usize,
+    outages: &'a OutageSchedule,
+}
+
+/// Time of validity on the IMU time scale: GNSS-clock inputs shifted by the offset.
+pub fn effective_time(m: &Measurement, time_offset_s: f64) -> f64 {
+    m.t()
+        + if m.on_gnss_clock() {
+            time_offset_s
+        } else {
+            0.0
+        }
+}
+
+impl<'a> Inbox<'a> {
+    pub fn new(meas: &'a [Measurement], outages: &'a OutageSchedule) -> Self {
+        Inbox {
+            meas,
+            next: 0,
+            outages,
+        }
+    }
+
+    /// Drop the leading measurements for which `unused` holds; returns them.
+    pub fn skip_while(
+        &mut self,
+        mut unused: impl FnMut(&Measurement) -> bool,
+    ) -> &'a [Measurement] {
+        let first = self.next;
+        while self.next < self.meas.len() && unused(&self.meas[self.next]) {
+            self.next += 1;
+        }
+        &self.meas[first..self.next]
+    }
+
+    /// The next measurement whose effective time is at or before `t_end`.
+    pub fn next_due(&mut self, t_end: f64, time_offset_s: f64) -> Option<Due<'a>> {
+        let m = self.meas.get(self.next)?;
+        let t_eff = effective_time(m, time_offset_s);
+        if t_eff > t_end {
+            return None;
+        }
+        self.next += 1;
+        if m.on_gnss_clock() && self.outages.contains(m.t()) {
+            return Some(Due::Withheld(m));
+        }
+        Some(Due::Apply { m, t_eff })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector3;
+    use rand::{RngExt, SeedableRng};
+
+    fn sample(t: f64, dt: f64) -> ImuSample {
+        ImuSample {
+            t,
+            dt,
+            dtheta: Vector3::new(0.3, -1.1, 0.7) * dt,
+            dvel: Vector3::new(9.8, 0.2, -3.0) * dt,
+        }
+    }
+
+    /// Cuts at random times (on, within 1e-12..1e-6 s of, and between the interval's
+    /// ends; duplicates; times already passed): the pieces add up to the interval.
+    #[test]
+    fn pieces_add_up_to_the_interval() {
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(15);
+        for _ in 0..20_000 {
+            let dt = 0.005;
+            let s = sample(100.0 + dt, dt);
+            let t0 = s.t - s.dt;
+            let mut times: Vec<f64> = (0..rng.random_range(0..6))
+                .map(|_| match rng.random_range(0..5) {
+                    0 => t0,
+                    1 => s.t,
+                    2 => {
+                        s.t + if rng.random() { 1.0 } else { -1.0 }
+                            * 10f64.powf(rng.random_range(-12.0..-6.0))
+                    }
+                    3 => t0 + 10f64.powf(rng.random_range(-12.0..-6.0)),
+                    _ => t0 + rng.random::<f64>() * dt,
+                })
+                .collect();
+            if rng.random() {
+                times.extend(times.clone());
+            }
+            times.sort_by(f64::total_cmp);
+            let mut rest = IntervalRest::new(s);
+            let mut sum = (0.0, Vector3::zeros(), Vector3::zeros());
+            let mut t_prev = t0;
+            for &t in &times {
+                if let Some(p) = rest.cut_until(t) {
+                    assert!(p.dt > 0.0 && p.t > t_prev && p.t <= s.t);
+                    t_prev = p.t;
+                    sum = (sum.0 + p.dt, sum.1 + p.dtheta, sum.2 + p.dvel);
+                }
+            }
+            if let Some(p) = rest.take_rest() {
+                assert_eq!(p.t, s.t);
+                sum = (sum.0 + p.dt, sum.1 + p.dtheta, sum.2 + p.dvel);
+            }
+            assert!(rest.take_rest().is_none() && rest.cut_until(s.t + 1.0).is_none());
+            // Equal up to floating-point rounding of the cuts (a few ulp).
+            assert!(
+                (sum.0 - s.dt).abs() <= 4.0 * f64::EPSILON * s.dt,
+                "{times:?}"
+            );
+            assert!((sum.1 - s.dtheta).norm() <= 8.0 * f64::EPSILON * s.dtheta.norm());
+            assert!((sum.2 - s.dvel).norm() <= 8.0 * f64::EPSILON * s.dvel.norm());
+        }
+    }
+
+    /// A cut at the end, then a second measurement at the same time: nothing more.
+    #[test]
+    fn second_measurement_at_the_end_integrates_nothing() {
+        let s = sample(1.0, 0.01);
+        let mut rest = IntervalRest::new(s);
+        let p = rest.cut_until(1.0).unwrap();
+        assert_eq!((p.dt, p.dtheta, p.dvel), (s.dt, s.dtheta, s.dvel));
+        assert!(rest.cut_until(1.0).is_none());
+        assert!(rest.take_rest().is_none());
+    }
+}
