@@ -314,6 +314,12 @@ pub struct OdometerOptions {
     /// Also apply zero lateral/vertical velocity with each odometer speed (seed 004's
     /// 3-row measurement v^m = [v 0 0]) when the NHC is otherwise off.
     pub with_nhc: bool,
+    /// Speed-proportional part of the speed noise [-]: the 1-sigma is
+    /// sqrt(std_mps² + (std_speed_fraction v)²) (wheel slip, tyre deformation).
+    pub std_speed_fraction: f64,
+    /// Below this speed (measured or INS) the odometer update does not touch the scale
+    /// and mounting states: near standstill their columns are noise (v H_k) [m/s].
+    pub calibration_min_speed_mps: f64,
     /// Innovation test probability (1 dof); None = no gate.
     pub gate_probability: Option<f64>,
 }
@@ -323,6 +329,8 @@ impl Default for OdometerOptions {
         OdometerOptions {
             enabled: false,
             std_mps: 0.05,
+            std_speed_fraction: 0.0,
+            calibration_min_speed_mps: 1.0,
             scale_initial: 0.0,
             scale_std: 0.01,
             scale_random_walk: 0.0,
@@ -390,6 +398,16 @@ pub struct ZuptOptions {
     /// GNSS fix (within 2 s) are below this [m/s]: constant-velocity straight driving
     /// looks static to an IMU without vibration (e.g. in simulation).
     pub max_speed_mps: f64,
+    /// The odometer vetoes a standstill while the mean of its speeds over the window
+    /// exceeds this [m/s] (a noisy odometer reads non-zero when parked).
+    pub odometer_still_mps: f64,
+    /// No standstill while the INS's own mean acceleration over the window (its
+    /// mechanization, without filter corrections) exceeds this [m/s²]: smooth
+    /// braking without vibration looks static to the IMU detector.
+    pub max_accel_mps2: f64,
+    /// Innovation test probability of ZUPT and ZARU (3 dof); None = no gate. A
+    /// rejected ZUPT ends the standstill.
+    pub gate_probability: Option<f64>,
 }
 
 impl Default for ZuptOptions {
@@ -403,6 +421,9 @@ impl Default for ZuptOptions {
             velocity_std_mps: 0.01,
             angular_rate_std: 0.01_f64.to_radians(),
             max_speed_mps: 1.0,
+            odometer_still_mps: 0.2,
+            max_accel_mps2: 0.5,
+            gate_probability: Some(1e-4),
         }
     }
 }

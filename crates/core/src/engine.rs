@@ -28,7 +28,7 @@ use crate::integrity::{
 use crate::mechanization::Mechanizer;
 use crate::six_state::{ImuFix, SixState, SixStateOutcome};
 use crate::state::{Block, StateLayout, ATT, BA, BG, N_INS, POS, SA, SG, VEL};
-use crate::static_detect::StaticDetector;
+use crate::static_detect::{mean_horizontal_accel, mean_speed, StaticDetector, Window};
 use crate::timeline::{effective_time, Due, Inbox, IntervalRest};
 use crate::types::{
     GnssFix, GnssRawEpoch, HeadingObs, ImuErrors, ImuSample, Measurement, NavState, SatMeasurement,
@@ -209,8 +209,14 @@ pub struct Navigator {
     prev_fix: Option<GnssFix>,
     detector: StaticDetector,
     is_static: bool,
-    /// Last time the odometer reported motion (IMU time).
-    odo_moving_t: f64,
+    /// The last ZUPT was refused by its innovation test (not static meanwhile).
+    zupt_refused: bool,
+    /// Odometer speeds over the static-detection window (IMU time).
+    odo_speeds: Window<f64>,
+    /// Running sum of the mechanization's own velocity increments (no feedback),
+    /// NED [m/s], sampled after each IMU sample over the static-detection window.
+    mech_dv_n: Vector3<f64>,
+    mech_dv_window: Window<Vector3<f64>>,
     /// Last time a GNSS fix reported a speed above `zupt.max_speed_mps` (GNSS time).
     gnss_moving_t: f64,
     next_nhc_t: f64,
@@ -381,7 +387,10 @@ impl Navigator {
             prev_fix: None,
             detector: StaticDetector::new(cfg.zupt.window_s),
             is_static: false,
-            odo_moving_t: f64::NEG_INFINITY,
+            zupt_refused: false,
+            odo_speeds: Window::new(cfg.zupt.window_s),
+            mech_dv_n: Vector3::zeros(),
+            mech_dv_window: Window::new(cfg.zupt.window_s),
             gnss_moving_t: f64::NEG_INFINITY,
             next_nhc_t: t0,
             next_zupt_t: t0,
@@ -493,6 +502,7 @@ impl Navigator {
         self.time_offset_s += self.time_offset_rate * (raw.t - self.nav.t);
         let v_before = self.nav.v_n;
         let (next, info) = self.mech.step(&self.nav, &s);
+        self.mech_dv_n += next.v_n - v_before;
         self.nav = next;
         if self.cfg.tight.enabled {
             let t = &mut self.tight;
@@ -587,7 +597,11 @@ impl Navigator {
         };
         let logged = matches!(
             aiding,
-            Aiding::GnssPosition(_) | Aiding::GnssVelocity(_) | Aiding::Heading(..)
+            Aiding::GnssPosition(_)
+                | Aiding::GnssVelocity(_)
+                | Aiding::Heading(..)
+                | Aiding::Zupt(_)
+                | Aiding::Zaru(..)
         );
         let name = aiding.name();
         // GnssFusion::SixState: the gain carries the DR error correlation through
@@ -700,9 +714,7 @@ impl Navigator {
             Measurement::Gnss(fix) => self.update_gnss(fix),
             Measurement::GnssRaw(epoch) => self.update_tight(epoch),
             Measurement::Odometer(o) => {
-                if o.speed_mps.abs() > 1e-3 {
-                    self.odo_moving_t = self.nav.t;
-                }
+                self.odo_speeds.push(self.nav.t, o.speed_mps);
                 let c = &self.cfg.odometer;
                 if !c.enabled {
                     return;
@@ -710,10 +722,12 @@ impl Navigator {
                 let nhc_std = (c.with_nhc && self.cfg.nhc.mode == NhcMode::Off)
                     .then_some(self.cfg.nhc.std_mps);
                 let rows = if nhc_std.is_some() { 3 } else { 1 };
+                let v_min = c.calibration_min_speed_mps;
                 let aiding = Aiding::Odometer {
                     speed_mps: o.speed_mps,
-                    std_mps: c.std_mps,
+                    std_mps: c.std_mps.hypot(c.std_speed_fraction * o.speed_mps),
                     nhc_std,
+                    calibrate: o.speed_mps.abs() >= v_min && self.nav.v_n.norm() >= v_min,
                 };
                 self.fuse(aiding, chi2_gate(rows, c.gate_probability));
             }
@@ -1334,31 +1348,47 @@ impl Navigator {
         let t = self.nav.t;
         let z = self.cfg.zupt.clone();
         if z.enabled {
-            // Vetoes: the odometer or a recent GNSS fix saw motion, or the INS is fast.
-            let odo_still = !self.cfg.odometer.enabled || t - self.odo_moving_t > z.window_s;
+            // Vetoes: the odometer or a recent GNSS fix saw motion, the INS is fast or
+            // its own mechanization accelerates (smooth braking looks static).
+            self.mech_dv_window.push(t, self.mech_dv_n);
+            let odo_still = !self.cfg.odometer.enabled
+                || mean_speed(&self.odo_speeds, t).is_none_or(|v| v.abs() <= z.odometer_still_mps);
             let gnss_still = self.time_gnss() - self.gnss_moving_t > 2.0;
             let slow = self.nav.v_n.norm() < z.max_speed_mps;
+            let steady = mean_horizontal_accel(&self.mech_dv_window, z.window_s)
+                .is_none_or(|a| a <= z.max_accel_mps2);
             let w = self
                 .detector
                 .static_mean_rate(z.accel_std_max, z.gyro_max)
-                .filter(|_| odo_still && gnss_still && slow);
+                .filter(|_| odo_still && gnss_still && slow && steady);
+            let mut w = w;
+            match w {
+                None => self.zupt_refused = false,
+                Some(rate) if t >= self.next_zupt_t - 1e-9 => {
+                    let dt = 1.0 / z.rate_hz;
+                    self.next_zupt_t = t + dt;
+                    let gate = chi2_gate(3, z.gate_probability);
+                    let fused = self.fuse(Aiding::Zupt(z.velocity_std_mps), gate);
+                    // The INS disagrees with a standstill: not static until it agrees.
+                    self.zupt_refused = fused != Fused::Applied;
+                    if !self.zupt_refused {
+                        self.summary.static_s += dt;
+                        if z.angular_rate_std > 0.0 {
+                            self.fuse(Aiding::Zaru(rate, z.angular_rate_std), gate);
+                        }
+                    }
+                }
+                Some(_) => {}
+            }
+            if self.zupt_refused {
+                w = None;
+            }
             if w.is_some() != self.is_static {
                 self.is_static = w.is_some();
                 self.summary.events.push(Event::Static {
                     t: self.time_gnss(),
                     begins: self.is_static,
                 });
-            }
-            if let Some(w) = w {
-                if t >= self.next_zupt_t - 1e-9 {
-                    let dt = 1.0 / z.rate_hz;
-                    self.summary.static_s += dt;
-                    self.next_zupt_t = t + dt;
-                    self.fuse(Aiding::Zupt(z.velocity_std_mps), None);
-                    if z.angular_rate_std > 0.0 {
-                        self.fuse(Aiding::Zaru(w, z.angular_rate_std), None);
-                    }
-                }
             }
         }
         let c = &self.cfg.nhc;

@@ -87,9 +87,77 @@ impl StaticDetector {
     }
 }
 
+/// Time-stamped values over a sliding window, for the standstill vetoes: the mean
+/// odometer speed, and the INS's mean acceleration from the running sum of its
+/// mechanization velocity increments.
+#[derive(Clone, Debug)]
+pub struct Window<T> {
+    window_s: f64,
+    items: VecDeque<(f64, T)>,
+}
+
+impl<T: Copy> Window<T> {
+    pub fn new(window_s: f64) -> Self {
+        Window {
+            window_s,
+            items: VecDeque::new(),
+        }
+    }
+
+    /// Add a value at `t`; values older than the window (but the newest) are dropped.
+    pub fn push(&mut self, t: f64, v: T) {
+        self.items.push_back((t, v));
+        while self.items.len() > 1 && self.items[0].0 < t - self.window_s - 1e-9 {
+            self.items.pop_front();
+        }
+    }
+
+    /// The values no older than the window as seen from `t_now`.
+    pub fn recent(&self, t_now: f64) -> impl Iterator<Item = &(f64, T)> {
+        let since = t_now - self.window_s - 1e-9;
+        self.items.iter().filter(move |(t, _)| *t >= since)
+    }
+
+    /// Oldest and newest entry.
+    pub fn ends(&self) -> Option<(&(f64, T), &(f64, T))> {
+        Some((self.items.front()?, self.items.back()?))
+    }
+}
+
+/// Mean of the speeds [m/s] in the window ending at `t_now` (None: no reading).
+pub fn mean_speed(w: &Window<f64>, t_now: f64) -> Option<f64> {
+    let (n, sum) = w
+        .recent(t_now)
+        .fold((0usize, 0.0), |(n, s), (_, v)| (n + 1, s + v));
+    (n > 0).then(|| sum / n as f64)
+}
+
+/// Mean horizontal acceleration [m/s²] from a running sum of velocity increments
+/// (NED [m/s]) sampled in the window; None until it spans half the window.
+pub fn mean_horizontal_accel(w: &Window<Vector3<f64>>, window_s: f64) -> Option<f64> {
+    let ((t0, v0), (t1, v1)) = w.ends()?;
+    let span = t1 - t0;
+    (span >= 0.5 * window_s).then(|| (v1 - v0).xy().norm() / span)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn windows_average_what_they_hold() {
+        let mut odo = Window::new(1.0);
+        let mut dv = Window::new(1.0);
+        for k in 0..=30 {
+            let t = k as f64 * 0.1;
+            odo.push(t, if k % 2 == 0 { 0.1 } else { -0.1 });
+            dv.push(t, Vector3::new(-2.0 * t, 0.0, 0.3 * t));
+        }
+        assert!(mean_speed(&odo, 3.0).unwrap().abs() < 0.02);
+        assert!(mean_speed(&odo, 10.0).is_none());
+        let a = mean_horizontal_accel(&dv, 1.0).unwrap();
+        assert!((a - 2.0).abs() < 1e-9, "{a}");
+    }
 
     #[test]
     fn detects_rest_and_motion() {

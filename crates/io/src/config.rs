@@ -927,6 +927,10 @@ struct TOdometer {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     with_nhc: Option<bool>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    std_speed_fraction: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    calibration_min_speed_mps: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     gate_probability: Option<Gate>,
 }
 
@@ -993,6 +997,12 @@ struct TZupt {
     angular_rate_std_dps: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     max_speed_mps: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    odometer_still_mps: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    max_accel_mps2: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    gate_probability: Option<Gate>,
 }
 
 #[derive(Debug, Deserialize, Serialize)]
@@ -1727,6 +1737,20 @@ fn convert_odometer(o: &TOdometer, base: &Path) -> KResult<(OdometerSource, Odom
             d.scale_random_walk,
         )?,
         with_nhc: o.with_nhc.unwrap_or(d.with_nhc),
+        std_speed_fraction: opt_or(
+            "odometer.std_speed_fraction",
+            o.std_speed_fraction,
+            non_negative,
+            same,
+            d.std_speed_fraction,
+        )?,
+        calibration_min_speed_mps: opt_or(
+            "odometer.calibration_min_speed_mps",
+            o.calibration_min_speed_mps,
+            non_negative,
+            same,
+            d.calibration_min_speed_mps,
+        )?,
         gate_probability: gate(
             "odometer.gate_probability",
             o.gate_probability,
@@ -1928,6 +1952,25 @@ fn convert_zupt(z: &TZupt) -> KResult<ZuptOptions> {
             positive,
             same,
             d.max_speed_mps,
+        )?,
+        odometer_still_mps: opt_or(
+            "zupt.odometer_still_mps",
+            z.odometer_still_mps,
+            non_negative,
+            same,
+            d.odometer_still_mps,
+        )?,
+        max_accel_mps2: opt_or(
+            "zupt.max_accel_mps2",
+            z.max_accel_mps2,
+            positive,
+            same,
+            d.max_accel_mps2,
+        )?,
+        gate_probability: gate(
+            "zupt.gate_probability",
+            z.gate_probability,
+            d.gate_probability,
         )?,
     })
 }
@@ -2815,6 +2858,8 @@ fn to_raw(c: &RunConfig) -> TomlRoot {
             scale_std_ppm: Some(tidy(od.scale_std * 1e6)),
             scale_random_walk_ppm_per_sqrth: Some(tidy(psd_ppm_sqrth(od.scale_random_walk))),
             with_nhc: Some(od.with_nhc),
+            std_speed_fraction: Some(od.std_speed_fraction),
+            calibration_min_speed_mps: Some(od.calibration_min_speed_mps),
             gate_probability: Some(Gate::from_option(od.gate_probability)),
         }
     });
@@ -2839,6 +2884,9 @@ fn to_raw(c: &RunConfig) -> TomlRoot {
         velocity_std_mps: Some(z.velocity_std_mps),
         angular_rate_std_dps: Some(r2d(z.angular_rate_std)),
         max_speed_mps: Some(z.max_speed_mps),
+        odometer_still_mps: Some(z.odometer_still_mps),
+        max_accel_mps2: Some(z.max_accel_mps2),
+        gate_probability: Some(Gate::from_option(z.gate_probability)),
     };
     let sp = &c.nav.integrity;
     let spoofing = sp.enabled.then(|| TSpoofing {

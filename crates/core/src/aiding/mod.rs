@@ -71,11 +71,13 @@ pub enum Aiding<'a> {
     Heading(&'a HeadingObs, HeadingAxis),
     /// Non-holonomic constraint with lateral/vertical std [m/s].
     Nhc([f64; 2]),
-    /// Odometer speed [m/s], its std [m/s], optional NHC rows (seed 004's 3-row form).
+    /// Odometer speed [m/s], its std [m/s], optional NHC rows (seed 004's 3-row form);
+    /// `calibrate` = false leaves the scale and mounting states out (near standstill).
     Odometer {
         speed_mps: f64,
         std_mps: f64,
         nhc_std: Option<[f64; 2]>,
+        calibrate: bool,
     },
     /// Zero velocity, std [m/s].
     Zupt(f64),
@@ -119,7 +121,10 @@ impl Aiding<'_> {
                 speed_mps,
                 std_mps,
                 nhc_std,
-            } => Some(odometer::linearize(ctx, *speed_mps, *std_mps, *nhc_std)),
+                calibrate,
+            } => Some(odometer::linearize(
+                ctx, *speed_mps, *std_mps, *nhc_std, *calibrate,
+            )),
             Aiding::Zupt(std) => Some(zero_velocity::linearize_zupt(ctx, *std)),
             Aiding::Zaru(w, std) => Some(zero_velocity::linearize_zaru(ctx, w, *std)),
             Aiding::Pseudorange(sat) => pseudorange::linearize(ctx, sat),
@@ -301,6 +306,7 @@ pub(crate) mod tests {
                 speed_mps: 9.0,
                 std_mps: 0.05,
                 nhc_std: Some([0.1, 0.1]),
+                calibrate: true,
             },
             Aiding::Zupt(0.01),
         ] {

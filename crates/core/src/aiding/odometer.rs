@@ -6,6 +6,10 @@
 //!
 //! With `nhc_std`, the lateral and vertical rows (v^m = [v 0 0]^T, seed 004's
 //! three-row measurement) are appended.
+//!
+//! Near standstill (`calibrate` = false) the scale and mounting columns are zeroed:
+//! there H_k = -s_od is the speed noise itself and would drive k (issue 15: -71 %
+//! while parked with 0.1 m/s noise).
 
 use super::{vehicle_frame::vehicle_velocity, AidingContext, Linearized};
 use crate::state::Block;
@@ -16,6 +20,7 @@ pub fn linearize(
     speed_mps: f64,
     std_mps: f64,
     nhc_std: Option<[f64; 2]>,
+    calibrate: bool,
 ) -> Linearized {
     let (v_m, h3) = vehicle_velocity(ctx);
     let rows = if nhc_std.is_some() { 3 } else { 1 };
@@ -24,7 +29,10 @@ pub fn linearize(
     y[0] = v_m.x - (1.0 + k) * speed_mps;
     let mut h = h3.rows(0, rows).into_owned();
     if let Some(i) = ctx.layout.index(Block::OdometerScale) {
-        h[(0, i)] = -speed_mps;
+        h[(0, i)] = if calibrate { -speed_mps } else { 0.0 };
+    }
+    if let (false, Some(i)) = (calibrate, ctx.layout.index(Block::Mounting)) {
+        h.columns_mut(i, 2).fill(0.0);
     }
     let mut r = DMatrix::zeros(rows, rows);
     r[(0, 0)] = std_mps.powi(2);
