@@ -7,6 +7,7 @@ mod bench_cmd;
 mod bench_tight;
 mod eval_cmd;
 mod gnss_input;
+mod plausibility;
 mod reproduce_cmd;
 mod run_cmd;
 mod sim_cmd;
@@ -278,7 +279,10 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("navfuse: error: {e:#}");
-            ExitCode::FAILURE
+            match e.downcast_ref::<run_cmd::Interrupted>() {
+                Some(i) => ExitCode::from(i.exit_status()),
+                None => ExitCode::FAILURE,
+            }
         }
     }
 }
