@@ -223,6 +223,41 @@ pub fn time_offset_fit(tau_s: f64, rate: f64) -> Vec<Finding> {
     out
 }
 
+/// GPS - UTC [s] in the GPS week `week` (18 s when unknown): the leap seconds since 1999.
+pub fn leap_seconds(week: Option<u32>) -> f64 {
+    // First GPS week of each value: 1999-01-01, 2006-01-01, 2009-01-01, 2012-07-01,
+    // 2015-07-01, 2017-01-01.
+    const STEPS: [(u32, f64); 6] = [
+        (990, 13.0),
+        (1356, 14.0),
+        (1513, 15.0),
+        (1695, 16.0),
+        (1851, 17.0),
+        (1930, 18.0),
+    ];
+    let Some(w) = week else { return 18.0 };
+    STEPS
+        .iter()
+        .rev()
+        .find(|(from, _)| w >= *from)
+        .map_or(13.0, |s| s.1)
+}
+
+/// The fit from a zero prior was implausible (`tau0_s`); a second fit started from
+/// plus or minus the leap seconds found `tau_s` with rate `rate` [s/s]: when that one
+/// is plausible and a whole number of leap seconds, the GNSS tags are likely UTC.
+pub fn leap_second_fit(tau0_s: f64, tau_s: f64, rate: f64) -> Vec<Finding> {
+    let n = tau_s.round();
+    let plausible_rate = (rate * 1e6).abs() <= MAX_TIME_OFFSET_RATE_PPM;
+    if !plausible_rate || (tau_s - n).abs() > 0.5 || !LEAP_SECONDS.contains(&(n.abs() as i64)) {
+        return Vec::new();
+    }
+    vec![Finding::warning(format!(
+        "the GNSS-IMU time offset fitted from the prior is {tau0_s:.3} s, but started from {n:.0} s it fits {tau_s:.3} s at {:.0} ppm: {n:.0} s: UTC vs GPST? the GNSS (or IMU) time tags look like UTC labelled as GPS time; tag both in GPS time, or set [gnss] time_offset_s = {n:.0} (and keep [filter] time_offset for the rest)",
+        rate * 1e6
+    ))]
+}
+
 /// The time-offset prior std [s] of the configuration.
 pub fn time_offset_prior(std_s: f64) -> Vec<Finding> {
     if std_s < MAX_TIME_OFFSET_STD_S {
@@ -467,6 +502,13 @@ mod tests {
         let w = time_offset_fit(0.0, 2000e-6);
         assert!(w[0].message.contains("2000 ppm"));
         assert!(time_offset_fit(f64::NAN, 0.0)[0].is_error());
+        assert_eq!(leap_seconds(Some(2374)), 18.0);
+        assert_eq!(leap_seconds(Some(1600)), 15.0);
+        assert_eq!(leap_seconds(None), 18.0);
+        let w = leap_second_fit(-3.6, 17.98, 290e-6);
+        assert!(w[0].message.contains("18 s: UTC vs GPST?"), "{}", w[0]);
+        assert!(leap_second_fit(-3.6, 17.98, 0.1).is_empty());
+        assert!(leap_second_fit(-3.6, 3.0, 0.0).is_empty());
         assert!(time_offset_prior(0.5).is_empty());
         assert!(time_offset_prior(30.0)[0].message.contains("wrong epoch"));
     }

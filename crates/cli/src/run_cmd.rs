@@ -254,9 +254,10 @@ pub fn run_job_opts(
     let reports = write_reports(out_dir, &mut job, progress);
     match (outcome, reports) {
         (Ok(()), Ok(())) => Ok(job),
-        (Ok(()), Err(e)) | (Err(_), Err(e)) if job.status != "interrupted" => {
-            Err(e.context(job.error.clone().unwrap_or_default()))
-        }
+        (Err(_), Err(e)) if job.status != "interrupted" => Err(anyhow::anyhow!(
+            "{}; and then: {e:#}",
+            job.error.as_deref().unwrap_or_default()
+        )),
         (Err(e), Err(r)) => {
             eprintln!("navfuse: error: {r:#}");
             Err(e)
@@ -444,41 +445,40 @@ fn navigate(
         first_t
     };
     cfg.resolve_relative_outages(run_start);
-    let input_notes = &mut job.notes;
 
     // GNSS-IMU time offset: pass 1 estimates offset and rate as filter states; pass 2
     // navigates with the resulting line tau(t) = tau0 + rate (t - t0) held fixed, so that
     // solution time tags (on the GNSS time scale) stay monotonic.
     if let Some(to) = cfg.nav.filter.time_offset {
         if to.std_s > 0.0 {
-            let pass1_reader = open_imu(&cfg.imu).map_err(|e| anyhow::anyhow!("{e}"))?;
-            let s1 = navfuse_core::run(
-                &cfg.nav,
-                pass1_reader.map(|r| stop_on_signal(r.map_err(|e| anyhow::anyhow!("{e}")))),
-                &measurements,
-                Some(f64::INFINITY),
-                |_| Ok(()),
-                |_| {},
-            )
-            .context("time-offset estimation pass")?;
-            if let Some((tau_end, sd)) = s1.time_offset {
-                let (rate, rate_sd) = s1.time_offset_rate.unwrap_or((to.initial_rate, 0.0));
-                let tau0 = tau_end - rate * (s1.last_t - s1.first_t);
-                time_offset_pass1 = Some(TimeOffsetFit {
-                    tau0,
-                    tau0_sd: sd,
-                    rate,
-                    rate_sd,
-                    t0: s1.first_t,
-                });
+            let fit = time_offset_pass(&cfg, &measurements, to)?;
+            if let Some(f) = fit {
+                // An implausible fit: would the offset of GPS time against UTC fit?
+                if !plausibility::time_offset_fit(f.tau0, f.rate).is_empty() {
+                    let leap = plausibility::leap_seconds(gnss_week);
+                    for cand in [leap, -leap] {
+                        let start = TimeOffsetConfig {
+                            initial_s: cand,
+                            ..to
+                        };
+                        if let Some(g) = time_offset_pass(&cfg, &measurements, start)? {
+                            let found = plausibility::leap_second_fit(f.tau0, g.tau0, g.rate);
+                            if !found.is_empty() {
+                                check(job, warn, found)?;
+                                break;
+                            }
+                        }
+                    }
+                }
                 cfg.nav.filter.time_offset = Some(TimeOffsetConfig {
-                    initial_s: tau0,
+                    initial_s: f.tau0,
                     std_s: 0.0,
                     random_walk: 0.0,
-                    initial_rate: rate,
+                    initial_rate: f.rate,
                     rate_std: 0.0,
                 });
             }
+            time_offset_pass1 = fit;
         }
     }
     job.time_offset = time_offset_pass1;
@@ -625,7 +625,7 @@ fn navigate(
         .map_err(|_| anyhow::anyhow!("the output writer panicked"))?;
     let report = reader.report().clone();
     if !report.to_string().is_empty() {
-        input_notes.push(report.to_string());
+        job.notes.push(report.to_string());
     }
     if let Some(s) = stopped {
         job.summary = s;
@@ -713,6 +713,37 @@ fn navigate(
     Ok(())
 }
 
+/// The time-offset estimation pass from the prior `to`: the fitted line, or None when
+/// the run had no time-offset state.
+fn time_offset_pass(
+    cfg: &RunConfig,
+    measurements: &[navfuse_core::Measurement],
+    to: TimeOffsetConfig,
+) -> Result<Option<TimeOffsetFit>> {
+    let mut nav = cfg.nav.clone();
+    nav.filter.time_offset = Some(to);
+    let reader = open_imu(&cfg.imu).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let s1 = navfuse_core::run(
+        &nav,
+        reader.map(|r| stop_on_signal(r.map_err(|e| anyhow::anyhow!("{e}")))),
+        measurements,
+        Some(f64::INFINITY),
+        |_| Ok(()),
+        |_| {},
+    )
+    .context("time-offset estimation pass")?;
+    Ok(s1.time_offset.map(|(tau_end, sd)| {
+        let (rate, rate_sd) = s1.time_offset_rate.unwrap_or((to.initial_rate, 0.0));
+        TimeOffsetFit {
+            tau0: tau_end - rate * (s1.last_t - s1.first_t),
+            tau0_sd: sd,
+            rate,
+            rate_sd,
+            t0: s1.first_t,
+        }
+    }))
+}
+
 /// The IMU window at the start of the data against gravity, Earth rate and the
 /// configured bias bounds; `fix_lla` (the first GNSS fix) gives the local gravity when
 /// the configuration has no initial position.
@@ -790,7 +821,8 @@ fn write_reports(out_dir: &Path, job: &mut JobResult, progress: bool) -> Result<
     for n in &job.notes {
         text.push_str(&format!("# input: {n}\n"));
     }
-    for f in &job.findings {
+    // Errors are in the last line (how the run ended).
+    for f in job.findings.iter().filter(|f| !f.is_error()) {
         text.push_str(&format!("# {f}\n"));
     }
     for e in &job.summary.events {
