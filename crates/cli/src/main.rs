@@ -7,6 +7,7 @@ mod bench_cmd;
 mod bench_tight;
 mod eval_cmd;
 mod gnss_input;
+mod plausibility;
 mod reproduce_cmd;
 mod run_cmd;
 mod sim_cmd;
@@ -47,6 +48,14 @@ enum Command {
     /// the first pass finds the offset, the second navigates with it and writes the
     /// solution on the GNSS time scale. A progress bar is drawn on stderr when it is a
     /// terminal; a one-line summary is printed at the end.
+    ///
+    /// Plausibility checks (docs/FORMATS.md) warn about likely mistakes (units, axes,
+    /// lever arm in cm, UTC tags, a wide time-offset prior) naming the key to change,
+    /// and refuse what would be meaningless (GNSS not overlapping the IMU, a week
+    /// mismatch, an empty input, a start after the data): exit status 1. Failed runs
+    /// still write events.log and summary.json (`status`, `error`). SIGINT / SIGTERM
+    /// stop the run with every output at the same epoch and summary.json marked
+    /// "interrupted", exit status 130 / 143.
     Run {
         /// navfuse TOML configuration (docs/CONFIG.md); a .yaml file is read as KF-GINS.
         #[arg(required_unless_present = "kf_gins", conflicts_with = "kf_gins")]
@@ -278,7 +287,10 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("navfuse: error: {e:#}");
-            ExitCode::FAILURE
+            match e.downcast_ref::<run_cmd::Interrupted>() {
+                Some(i) => ExitCode::from(i.exit_status()),
+                None => ExitCode::FAILURE,
+            }
         }
     }
 }

@@ -118,12 +118,73 @@ impl Out {
         r.map_err(|e| InputError::write(&self.path, &e))
     }
 
-    fn finish(mut self) -> Result<(), InputError> {
+    /// Hand the buffered lines to the file.
+    fn flush(&mut self) -> Result<(), InputError> {
         self.w
             .flush()
             .map_err(|e| InputError::write(&self.path, &e))
     }
+
+    /// Flush and close. When the flush fails (disk full), what could not be written
+    /// is dropped and the file is cut after its last complete line, so that it holds
+    /// only whole records.
+    fn finish(self) -> Result<(), InputError> {
+        let Out { path, mut w, .. } = self;
+        match w.flush() {
+            Ok(()) => Ok(()),
+            Err(e) => {
+                let (file, _) = w.into_parts();
+                let _ = cut_after_last_line(&file, &path);
+                Err(InputError::write(&path, &e))
+            }
+        }
+    }
 }
+
+/// Truncate `file` (open for writing at `path`) after its last newline.
+fn cut_after_last_line(file: &File, path: &Path) -> std::io::Result<()> {
+    use std::io::{Read, Seek, SeekFrom};
+    let len = file.metadata()?.len();
+    let from = len.saturating_sub(1 << 16);
+    let mut tail = Vec::new();
+    let mut r = File::open(path)?;
+    r.seek(SeekFrom::Start(from))?;
+    r.read_to_end(&mut tail)?;
+    let keep = match tail.iter().rposition(|&b| b == b'\n') {
+        Some(i) => from + i as u64 + 1,
+        None if from == 0 => 0,
+        None => return Ok(()),
+    };
+    if keep < len {
+        file.set_len(keep)?;
+    }
+    Ok(())
+}
+
+/// What `navfuse run` needs of every solution writer: write records, hand them to
+/// the file now and then, and close (each flushes; see `finish` on a full disk).
+pub trait RecordWriter: Send {
+    fn write_record(&mut self, r: &SolutionRecord) -> Result<(), InputError>;
+    fn flush(&mut self) -> Result<(), InputError>;
+    fn finish_boxed(self: Box<Self>) -> Result<(), InputError>;
+}
+
+macro_rules! record_writer {
+    ($($t:ty),*) => {$(
+        impl RecordWriter for $t {
+            fn write_record(&mut self, r: &SolutionRecord) -> Result<(), InputError> {
+                self.write(r)
+            }
+            fn flush(&mut self) -> Result<(), InputError> {
+                self.out.flush()
+            }
+            fn finish_boxed(self: Box<Self>) -> Result<(), InputError> {
+                self.out.finish()
+            }
+        }
+    )*};
+}
+record_writer!(NavWriter, ImuErrWriter, StdWriter, CsvWriter);
 
 /// KF-GINS navigation result (`.nav`), 11 columns: week, t [s], lat [deg], lon [deg],
 /// h [m], vN vE vD [m/s], roll pitch yaw [deg].

@@ -1,0 +1,642 @@
+//! Plausibility checks of `navfuse run`: inputs and results that parse but cannot be
+//! what the user meant (units, axes, time scales, weeks, empty files). Each check is a
+//! small function of plain values returning its findings, so that it can be tested
+//! alone and later move into a library crate. A [`Severity::Error`] means the result
+//! would be meaningless: the run is refused (before it) or reported as failed (after
+//! it, with its output kept); a [`Severity::Warning`] names the likely mistake and the
+//! configuration key to change.
+
+use nalgebra::Vector3;
+use navfuse_core::earth::OMEGA_IE;
+use navfuse_core::ImuSample;
+use std::fmt;
+
+/// Standard gravity [m/s²] (the unit `g`).
+const G0: f64 = 9.806_65;
+/// GPS - UTC has been a whole number of seconds between these (1996: 11 s ... 2017: 18 s;
+/// with a margin either side).
+const LEAP_SECONDS: std::ops::RangeInclusive<i64> = 10..=19;
+/// Lever arms longer than this [m] are probably given in cm or mm.
+pub const MAX_LEVER_ARM_M: f64 = 5.0;
+/// A time-offset prior this wide [s] lets the first pass lock onto a wrong epoch.
+pub const MAX_TIME_OFFSET_STD_S: f64 = 30.0;
+/// Fitted offsets beyond these are reported.
+pub const MAX_TIME_OFFSET_S: f64 = 1.0;
+pub const MAX_TIME_OFFSET_RATE_PPM: f64 = 1000.0;
+/// Below this fraction of usable GNSS epochs used, the reasons are reported.
+pub const MIN_GNSS_USED_FRACTION: f64 = 0.5;
+/// Land-vehicle roll / pitch beyond this [deg] at alignment is reported.
+pub const MAX_LAND_TILT_DEG: f64 = 45.0;
+/// Seconds of IMU data at the start of the file looked at by [`imu_window`].
+pub const DEFAULT_IMU_WINDOW_S: f64 = 10.0;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Severity {
+    Warning,
+    Error,
+}
+
+/// One finding of a check.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Finding {
+    pub severity: Severity,
+    pub message: String,
+}
+
+impl Finding {
+    pub fn warning(message: impl Into<String>) -> Self {
+        Finding {
+            severity: Severity::Warning,
+            message: message.into(),
+        }
+    }
+    pub fn error(message: impl Into<String>) -> Self {
+        Finding {
+            severity: Severity::Error,
+            message: message.into(),
+        }
+    }
+    pub fn is_error(&self) -> bool {
+        self.severity == Severity::Error
+    }
+}
+
+impl fmt::Display for Finding {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.severity {
+            Severity::Warning => write!(f, "warning: {}", self.message),
+            Severity::Error => write!(f, "error: {}", self.message),
+        }
+    }
+}
+
+/// A time span [first, last] of some input, with its file and GPS week when known.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Span {
+    pub file: String,
+    pub first: f64,
+    pub last: f64,
+    pub week: Option<u32>,
+}
+
+/// The GNSS epochs and the IMU data must overlap. `imu.last` may be +inf before the
+/// IMU file has been read to its end (then only GNSS wholly before the IMU is found).
+/// Times are on the IMU's week reference (GNSS already shifted by the week difference).
+pub fn time_overlap(imu: &Span, gnss: &Span) -> Vec<Finding> {
+    if gnss.last >= imu.first && gnss.first <= imu.last {
+        return Vec::new();
+    }
+    let imu_end = if imu.last.is_finite() {
+        format!("{:.3}", imu.last)
+    } else {
+        "...".to_string()
+    };
+    let mut msg = format!(
+        "the GNSS epochs ({}, t {:.3} .. {:.3}) do not overlap the IMU data ({}, t {:.3} .. {imu_end}): the run would be free inertial",
+        gnss.file, gnss.first, gnss.last, imu.file, imu.first
+    );
+    // Distance between the spans, to name the likely cause.
+    let gap = if gnss.first > imu.last {
+        gnss.first - imu.last
+    } else {
+        gnss.last - imu.first
+    };
+    match (imu.week, gnss.week) {
+        (Some(wi), Some(wg)) if wi != wg => msg.push_str(&format!(
+            "; week mismatch: the IMU data are in GPS week {wi}, the GNSS in week {wg} \
+             (fix the time tags, or shift one input with [imu] time_offset_s / [gnss] time_offset_s)"
+        )),
+        _ if (gap.abs() / WEEK_S).round() >= 1.0 && (gap.abs() % WEEK_S) < 3600.0 * 24.0 => {
+            msg.push_str(
+                "; the gap is about a whole number of weeks: one input in another GPS week? \
+                 (shift it with [imu] time_offset_s / [gnss] time_offset_s)",
+            )
+        }
+        _ => msg.push_str(
+            "; are both on the same time scale (GPS seconds of week)? check [imu.csv] time_scale, \
+             [imu] time_offset_s and [gnss] time_offset_s",
+        ),
+    }
+    vec![Finding::error(msg)]
+}
+
+const WEEK_S: f64 = 604_800.0;
+
+/// A GNSS input was configured but gave no epoch.
+pub fn gnss_not_empty(file: &str, epochs: usize, skipped: usize) -> Vec<Finding> {
+    if epochs > 0 {
+        return Vec::new();
+    }
+    let why = if skipped > 0 {
+        format!(
+            "all {skipped} epochs were dropped by [gnss] quality / decimate_s: relax those keys"
+        )
+    } else {
+        "the file holds no epoch: is it the right file? (remove [gnss] for a free-inertial run)"
+            .to_string()
+    };
+    vec![Finding::error(format!("{file}: no GNSS epochs; {why}"))]
+}
+
+/// `[time] start` must lie before the end of the data (`data_last`, from `what`).
+pub fn start_before_end(start: f64, data_last: f64, what: &str) -> Vec<Finding> {
+    if !start.is_finite() || start <= data_last {
+        return Vec::new();
+    }
+    vec![Finding::error(format!(
+        "[time] start = {start:.3} is after the end of the data ({what} ends at t = {data_last:.3}): nothing to navigate; set [time] start within the data"
+    ))]
+}
+
+/// GNSS epoch counts after a run (RunSummary) and the epochs inside the IMU span.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GnssUse {
+    pub in_span: usize,
+    pub used: usize,
+    pub rejected: usize,
+    pub in_outages: usize,
+    pub before_start: usize,
+}
+
+/// Fewer than half of the GNSS epochs that could be used (inside the IMU data and not
+/// in a configured outage) were used: the reasons, with counts.
+pub fn gnss_usage(u: &GnssUse) -> Vec<Finding> {
+    let usable = u.in_span.saturating_sub(u.in_outages);
+    if usable == 0 || u.used as f64 >= MIN_GNSS_USED_FRACTION * usable as f64 {
+        return Vec::new();
+    }
+    let other = usable.saturating_sub(u.used + u.rejected + u.before_start);
+    let mut why = Vec::new();
+    if u.rejected > 0 {
+        why.push(format!(
+            "{} rejected by the innovation gate (see events.log; [gnss] gate_probability, the [imu_noise] stds, or a time offset: [filter] time_offset)",
+            u.rejected
+        ));
+    }
+    if u.before_start > 0 {
+        why.push(format!(
+            "{} before the start or used for the alignment ([time] start, [initial.alignment])",
+            u.before_start
+        ));
+    }
+    if other > 0 {
+        why.push(format!(
+            "{other} after the run stopped or otherwise not fused ([time] end)"
+        ));
+    }
+    vec![Finding::warning(format!(
+        "GNSS: only {} of the {usable} epochs within the IMU data and outside outages were used ({}): the solution is mostly free inertial",
+        u.used,
+        why.join("; ")
+    ))]
+}
+
+/// The fitted GNSS-IMU time offset [s] and rate [s/s].
+pub fn time_offset_fit(tau_s: f64, rate: f64) -> Vec<Finding> {
+    let mut out = Vec::new();
+    if !tau_s.is_finite() || !rate.is_finite() {
+        out.push(Finding::error(format!(
+            "the GNSS-IMU time offset estimate is not finite (offset {tau_s}, rate {rate}): check [filter] time_offset"
+        )));
+        return out;
+    }
+    if tau_s.abs() > MAX_TIME_OFFSET_S {
+        let n = tau_s.round() as i64;
+        let hint = if (tau_s - n as f64).abs() <= 0.5 && LEAP_SECONDS.contains(&n.abs()) {
+            format!(
+                " ({n} s: UTC vs GPST? GPS time is ahead of UTC by the leap seconds, 18 s since 2017; tag both inputs in GPS time or set [gnss] time_offset_s = {})",
+                n
+            )
+        } else {
+            " (a logging latency, or inputs on different time scales? set [gnss] time_offset_s or [imu] time_offset_s to it)".to_string()
+        };
+        out.push(Finding::warning(format!(
+            "the fitted GNSS-IMU time offset is {tau_s:.3} s, more than {MAX_TIME_OFFSET_S} s{hint}"
+        )));
+    }
+    let ppm = rate * 1e6;
+    if ppm.abs() > MAX_TIME_OFFSET_RATE_PPM {
+        out.push(Finding::warning(format!(
+            "the fitted GNSS-IMU time offset rate is {ppm:.0} ppm, more than {MAX_TIME_OFFSET_RATE_PPM:.0} ppm: a wrong [imu] rate_hz or [imu.csv] time_unit? (or set [filter] time_offset rate_std_ppm smaller)"
+        )));
+    }
+    out
+}
+
+/// GPS - UTC [s] in the GPS week `week` (18 s when unknown): the leap seconds since 1999.
+pub fn leap_seconds(week: Option<u32>) -> f64 {
+    // First GPS week of each value: 1999-01-01, 2006-01-01, 2009-01-01, 2012-07-01,
+    // 2015-07-01, 2017-01-01.
+    const STEPS: [(u32, f64); 6] = [
+        (990, 13.0),
+        (1356, 14.0),
+        (1513, 15.0),
+        (1695, 16.0),
+        (1851, 17.0),
+        (1930, 18.0),
+    ];
+    let Some(w) = week else { return 18.0 };
+    STEPS
+        .iter()
+        .rev()
+        .find(|(from, _)| w >= *from)
+        .map_or(13.0, |s| s.1)
+}
+
+/// The fit from a zero prior was implausible (`tau0_s`); a second fit started from
+/// plus or minus the leap seconds found `tau_s` with rate `rate` [s/s]: when that one
+/// is plausible and a whole number of leap seconds, the GNSS tags are likely UTC.
+pub fn leap_second_fit(tau0_s: f64, tau_s: f64, rate: f64) -> Vec<Finding> {
+    let n = tau_s.round();
+    let plausible_rate = (rate * 1e6).abs() <= MAX_TIME_OFFSET_RATE_PPM;
+    if !plausible_rate || (tau_s - n).abs() > 0.5 || !LEAP_SECONDS.contains(&(n.abs() as i64)) {
+        return Vec::new();
+    }
+    vec![Finding::warning(format!(
+        "the GNSS-IMU time offset fitted from the prior is {tau0_s:.3} s, but started from {n:.0} s it fits {tau_s:.3} s at {:.0} ppm: {n:.0} s: UTC vs GPST? the GNSS (or IMU) time tags look like UTC labelled as GPS time; tag both in GPS time, or set [gnss] time_offset_s = {n:.0} (and keep [filter] time_offset for the rest)",
+        rate * 1e6
+    ))]
+}
+
+/// The time-offset prior std [s] of the configuration.
+pub fn time_offset_prior(std_s: f64) -> Vec<Finding> {
+    if std_s < MAX_TIME_OFFSET_STD_S {
+        return Vec::new();
+    }
+    vec![Finding::warning(format!(
+        "[filter] time_offset std_s = {std_s} s: a prior this wide lets the estimation lock onto a wrong epoch (offsets of -14 to -52 s have been seen); find the offset roughly, set [filter] time_offset initial_s (or [gnss] time_offset_s) to it and keep std_s under {MAX_TIME_OFFSET_STD_S} s"
+    ))]
+}
+
+/// A lever arm (`key`, metres) longer than [`MAX_LEVER_ARM_M`].
+pub fn lever_arm(key: &str, arm_m: &Vector3<f64>) -> Vec<Finding> {
+    let n = arm_m.norm();
+    if n <= MAX_LEVER_ARM_M {
+        return Vec::new();
+    }
+    vec![Finding::warning(format!(
+        "{key} = [{}, {}, {}] is {n:.1} m long: given in cm or mm? the key is in metres (e.g. [{}, {}, {}] if it was cm)",
+        arm_m.x,
+        arm_m.y,
+        arm_m.z,
+        arm_m.x / 100.0,
+        arm_m.y / 100.0,
+        arm_m.z / 100.0
+    ))]
+}
+
+/// Mean specific force [m/s²] and angular rate [rad/s] (body frame, as read) over
+/// the IMU window at the start of the file.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ImuWindow {
+    pub duration_s: f64,
+    pub mean_f: Vector3<f64>,
+    pub mean_w: Vector3<f64>,
+}
+
+/// Means over the samples (None without a positive total interval).
+pub fn imu_window(samples: &[ImuSample]) -> Option<ImuWindow> {
+    let dt: f64 = samples.iter().map(|s| s.dt).sum();
+    if !(dt > 0.0) {
+        return None;
+    }
+    let dv: Vector3<f64> = samples.iter().map(|s| s.dvel).sum();
+    let da: Vector3<f64> = samples.iter().map(|s| s.dtheta).sum();
+    Some(ImuWindow {
+        duration_s: dt,
+        mean_f: dv / dt,
+        mean_w: da / dt,
+    })
+}
+
+/// How the IMU file declares its units, to name the key to change.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImuUnits {
+    /// m/s² per accelerometer unit as declared (1 or 9.80665).
+    pub accel_scale: f64,
+    /// rad/s per gyro unit as declared (1 or pi/180).
+    pub gyro_scale: f64,
+    /// Where the units are set: `[imu.csv]` keys, or None when the format fixes them.
+    pub csv: bool,
+}
+
+/// Specific force against local gravity and angular rate against Earth rate plus the
+/// gyro-bias bound over the window at the start of the file (`static_start`: the
+/// configured alignment expects the vehicle at rest there). `gyro_bias_bound` [rad/s]
+/// is what the configuration allows the bias to be (3 sigma plus the initial estimate).
+pub fn imu_magnitudes(
+    w: &ImuWindow,
+    units: &ImuUnits,
+    gravity: f64,
+    gyro_bias_bound: f64,
+    static_start: bool,
+) -> Vec<Finding> {
+    let f = w.mean_f.norm();
+    let rate = w.mean_w.norm();
+    let head = format!(
+        "over the first {:.1} s of the IMU file the mean specific force is {f:.3} m/s² (local gravity {gravity:.3}) and the mean angular rate {:.4} rad/s ({:.1} deg/h)",
+        w.duration_s,
+        rate,
+        rate.to_degrees() * 3600.0
+    );
+    let key = |k: &str, v: &str| {
+        if units.csv {
+            format!("set [imu.csv] {k}{v}")
+        } else {
+            "the format fixes the units: check [imu] format (docs/FORMATS.md)".to_string()
+        }
+    };
+    let near = |x: f64, target: f64, tol: f64| (x - target).abs() <= tol * target;
+    let f_ok = near(f, gravity, 0.2);
+    // Reading the gyro columns in the accelerometer's declared unit.
+    let gyro_as_accel = rate / units.gyro_scale * units.accel_scale;
+    if !f_ok && near(gyro_as_accel, gravity, 0.25) {
+        return vec![Finding::warning(format!(
+            "{head}: the gyro columns read about 1 g and the accelerometer does not: accelerometer and gyro columns swapped? {}",
+            key("accel_cols / gyro_cols", "")
+        ))];
+    }
+    let mut out = Vec::new();
+    if !f_ok {
+        let msg = if near(f, gravity / G0, 0.25) {
+            format!(
+                "{head}: 1/9.81 of gravity: accelerometer in g declared as m/s²? {}",
+                key("accel_unit", " = \"g\"")
+            )
+        } else if near(f, gravity * G0, 0.25) {
+            format!(
+                "{head}: 9.81 times gravity: accelerometer in m/s² declared as g? {}",
+                key("accel_unit", " = \"m\"")
+            )
+        } else {
+            format!(
+                "{head}: not gravity: a wrong accelerometer unit or columns ({}), or the vehicle not at rest at the start?",
+                key("accel_unit / accel_cols", "")
+            )
+        };
+        out.push(Finding::warning(msg));
+    }
+    let limit = OMEGA_IE + gyro_bias_bound;
+    if static_start && rate > limit {
+        // The same numbers read as deg/s.
+        let as_deg = rate.to_radians();
+        let msg = if units.gyro_scale == 1.0 && as_deg <= limit * 2.0 {
+            format!(
+                "{head}, far above Earth rate plus the gyro bias bound ({:.1} deg/h): gyro in deg/s declared as rad/s? {}",
+                limit.to_degrees() * 3600.0,
+                key("gyro_unit", " = \"deg\"")
+            )
+        } else {
+            format!(
+                "{head}, above Earth rate plus the gyro bias bound ({:.1} deg/h): the vehicle not at rest at the start, a wrong gyro unit ({}), or a gyro bias larger than [initial] gyro_bias_std_degph allows?",
+                limit.to_degrees() * 3600.0,
+                key("gyro_unit", "")
+            )
+        };
+        out.push(Finding::warning(msg));
+    }
+    out
+}
+
+/// Roll and pitch of the aligned attitude [deg]. A land vehicle (NHC or odometer) sits
+/// within a few degrees of level; a tilt beyond [`MAX_LAND_TILT_DEG`] means the sensor
+/// axes were not turned into the body frame.
+pub fn aligned_tilt(rpy_deg: [f64; 3], land_vehicle: bool) -> Vec<Finding> {
+    let (roll, pitch) = (rpy_deg[0], rpy_deg[1]);
+    let tilted = roll.abs() > MAX_LAND_TILT_DEG || pitch.abs() > MAX_LAND_TILT_DEG;
+    if !land_vehicle || !tilted {
+        return Vec::new();
+    }
+    vec![Finding::warning(format!(
+        "the initial attitude has roll {roll:.1} deg, pitch {pitch:.1} deg: a land vehicle (NHC / odometer configured) is close to level; sensor-to-body rotation forgotten? set [imu] sensor_to_body_rpy_deg (e.g. [180, 0, 0] for a sensor z axis pointing up)"
+    ))]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn span(first: f64, last: f64, week: Option<u32>) -> Span {
+        Span {
+            file: "f".into(),
+            first,
+            last,
+            week,
+        }
+    }
+
+    #[test]
+    fn overlap_and_week_mismatch() {
+        assert!(time_overlap(&span(0.0, 100.0, None), &span(50.0, 200.0, None)).is_empty());
+        let e = time_overlap(&span(0.0, 100.0, None), &span(300.0, 400.0, None));
+        assert!(e[0].is_error() && e[0].message.contains("do not overlap"));
+        assert!(e[0].message.contains("time_offset_s"));
+        let e = time_overlap(
+            &span(0.0, 100.0, Some(2374)),
+            &span(WEEK_S, WEEK_S + 100.0, Some(2375)),
+        );
+        assert!(e[0].message.contains("week mismatch"), "{}", e[0]);
+        assert!(e[0].message.contains("2374") && e[0].message.contains("2375"));
+        // Before the IMU's end is known, only GNSS wholly before it is an error.
+        assert!(time_overlap(&span(50.0, f64::INFINITY, None), &span(60.0, 70.0, None)).is_empty());
+        assert_eq!(
+            time_overlap(&span(50.0, f64::INFINITY, None), &span(0.0, 10.0, None)).len(),
+            1
+        );
+    }
+
+    #[test]
+    fn empty_gnss_and_late_start() {
+        assert!(gnss_not_empty("g", 3, 0).is_empty());
+        assert!(gnss_not_empty("g", 0, 0)[0]
+            .message
+            .contains("no GNSS epochs"));
+        assert!(gnss_not_empty("g", 0, 7)[0].message.contains("quality"));
+        assert!(start_before_end(5.0, 10.0, "x").is_empty());
+        assert!(start_before_end(f64::NEG_INFINITY, 10.0, "x").is_empty());
+        let e = start_before_end(20.0, 10.0, "the IMU file");
+        assert!(
+            e[0].is_error() && e[0].message.contains("20.000") && e[0].message.contains("10.000")
+        );
+    }
+
+    #[test]
+    fn gnss_usage_reasons() {
+        let ok = GnssUse {
+            in_span: 100,
+            used: 60,
+            ..Default::default()
+        };
+        assert!(gnss_usage(&ok).is_empty());
+        // Outages are deliberate: not counted against the fraction.
+        let outages = GnssUse {
+            in_span: 100,
+            used: 30,
+            in_outages: 50,
+            ..Default::default()
+        };
+        assert!(gnss_usage(&outages).is_empty());
+        let bad = GnssUse {
+            in_span: 100,
+            used: 10,
+            rejected: 80,
+            before_start: 5,
+            in_outages: 0,
+        };
+        let w = gnss_usage(&bad);
+        assert_eq!(w.len(), 1);
+        let m = &w[0].message;
+        assert!(m.contains("10 of the 100") && m.contains("80 rejected") && m.contains("5 before"));
+        assert!(m.contains("5 after"), "{m}");
+    }
+
+    #[test]
+    fn time_offsets() {
+        assert!(time_offset_fit(0.2, 300e-6).is_empty());
+        let w = time_offset_fit(18.03, 0.0);
+        assert!(w[0].message.contains("18 s: UTC vs GPST?"), "{}", w[0]);
+        let w = time_offset_fit(-17.8, 0.0);
+        assert!(w[0].message.contains("-18 s: UTC vs GPST?"), "{}", w[0]);
+        let w = time_offset_fit(3.0, 0.0);
+        assert!(!w[0].message.contains("UTC") && w[0].message.contains("3.000"));
+        let w = time_offset_fit(0.0, 2000e-6);
+        assert!(w[0].message.contains("2000 ppm"));
+        assert!(time_offset_fit(f64::NAN, 0.0)[0].is_error());
+        assert_eq!(leap_seconds(Some(2374)), 18.0);
+        assert_eq!(leap_seconds(Some(1600)), 15.0);
+        assert_eq!(leap_seconds(None), 18.0);
+        let w = leap_second_fit(-3.6, 17.98, 290e-6);
+        assert!(w[0].message.contains("18 s: UTC vs GPST?"), "{}", w[0]);
+        assert!(leap_second_fit(-3.6, 17.98, 0.1).is_empty());
+        assert!(leap_second_fit(-3.6, 3.0, 0.0).is_empty());
+        assert!(time_offset_prior(0.5).is_empty());
+        assert!(time_offset_prior(30.0)[0].message.contains("wrong epoch"));
+    }
+
+    #[test]
+    fn lever_arms() {
+        assert!(lever_arm("[gnss] lever_arm_m", &Vector3::new(0.0, -0.05, -1.2)).is_empty());
+        let w = lever_arm("[gnss] lever_arm_m", &Vector3::new(0.0, -5.0, -120.0));
+        assert!(w[0].message.contains("cm or mm") && w[0].message.contains("[gnss] lever_arm_m"));
+    }
+
+    fn window(f: [f64; 3], w: [f64; 3]) -> ImuWindow {
+        ImuWindow {
+            duration_s: 10.0,
+            mean_f: Vector3::from(f),
+            mean_w: Vector3::from(w),
+        }
+    }
+
+    const CSV_SI: ImuUnits = ImuUnits {
+        accel_scale: 1.0,
+        gyro_scale: 1.0,
+        csv: true,
+    };
+    const BIAS: f64 = 1e-3; // about 200 deg/h
+
+    #[test]
+    fn imu_units_and_axes() {
+        let g = 9.80;
+        // Right: gravity and a small rate.
+        assert!(imu_magnitudes(
+            &window([0.1, 0.0, -9.8], [1e-4, 0.0, 0.0]),
+            &CSV_SI,
+            g,
+            BIAS,
+            true
+        )
+        .is_empty());
+        // Accelerometer in g declared m/s².
+        let w = imu_magnitudes(
+            &window([0.0, 0.0, -1.0], [1e-4, 0.0, 0.0]),
+            &CSV_SI,
+            g,
+            BIAS,
+            true,
+        );
+        assert!(
+            w[0].message
+                .contains("accelerometer in g declared as m/s²? set [imu.csv] accel_unit"),
+            "{}",
+            w[0]
+        );
+        // Columns swapped: |f| ~ 0, |w| ~ 9.8.
+        let w = imu_magnitudes(
+            &window([1e-4, 0.0, 0.0], [0.0, 0.0, -9.8]),
+            &CSV_SI,
+            g,
+            BIAS,
+            true,
+        );
+        assert_eq!(w.len(), 1);
+        assert!(w[0].message.contains("columns swapped"), "{}", w[0]);
+        // Swapped in g and deg/s: the gyro columns read 1 (g) as deg/s.
+        let gdeg = ImuUnits {
+            accel_scale: G0,
+            gyro_scale: 1f64.to_radians(),
+            csv: true,
+        };
+        let w = imu_magnitudes(
+            &window([0.2 * G0, 0.0, 0.0], [0.0, 0.0, 1f64.to_radians()]),
+            &gdeg,
+            g,
+            BIAS,
+            true,
+        );
+        assert!(w[0].message.contains("columns swapped"), "{}", w[0]);
+        // Gyro deg/s declared rad/s: 0.2 deg/s bias read as 0.2 rad/s.
+        let w = imu_magnitudes(
+            &window([0.0, 0.0, -9.8], [0.2, 0.0, 0.0]),
+            &CSV_SI,
+            g,
+            0.2f64.to_radians() * 3.0,
+            true,
+        );
+        assert!(
+            w[0].message
+                .contains("gyro in deg/s declared as rad/s? set [imu.csv] gyro_unit"),
+            "{}",
+            w[0]
+        );
+        // Not static: no gyro finding.
+        assert!(imu_magnitudes(
+            &window([0.0, 0.0, -9.8], [0.2, 0.0, 0.0]),
+            &CSV_SI,
+            g,
+            BIAS,
+            false
+        )
+        .is_empty());
+        // A format with fixed units names the format instead.
+        let fixed = ImuUnits {
+            csv: false,
+            ..CSV_SI
+        };
+        let w = imu_magnitudes(&window([0.0, 0.0, -1.0], [0.0; 3]), &fixed, g, BIAS, true);
+        assert!(w[0].message.contains("[imu] format"));
+    }
+
+    #[test]
+    fn window_means() {
+        let s = |t: f64| ImuSample {
+            t,
+            dt: 0.01,
+            dtheta: Vector3::new(0.0, 0.0, 1e-3),
+            dvel: Vector3::new(0.0, 0.0, -0.098),
+        };
+        let w = imu_window(&[s(0.01), s(0.02)]).unwrap();
+        assert!((w.mean_f.z + 9.8).abs() < 1e-9 && (w.mean_w.z - 0.1).abs() < 1e-12);
+        assert!(imu_window(&[]).is_none());
+    }
+
+    #[test]
+    fn tilt() {
+        assert!(aligned_tilt([2.0, -1.0, 90.0], true).is_empty());
+        assert!(aligned_tilt([179.0, 0.0, 90.0], false).is_empty());
+        let w = aligned_tilt([179.0, 0.5, 90.0], true);
+        assert!(w[0]
+            .message
+            .contains("sensor-to-body rotation forgotten? set [imu] sensor_to_body_rpy_deg"));
+    }
+}
