@@ -156,6 +156,7 @@ impl JobResult {
             "heading_records": self.heading_records,
             "aiding_used": s.aiding_used,
             "aiding_rejected": s.aiding_rejected,
+            "nis_per_row": s.aiding_nis.iter().map(|(k, (sum, rows))| (*k, sum / (*rows).max(1) as f64)).collect::<std::collections::BTreeMap<_, _>>(),
             "static_s": s.static_s,
             "odometer_scale": s.odometer_scale.map(|(k, sd)| serde_json::json!({
                 "k_ppm": k * 1e6,

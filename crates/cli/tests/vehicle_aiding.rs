@@ -126,18 +126,21 @@ fn seed002_nhc_improves_position_and_attitude() {
     );
 }
 
-/// Seed 001: heading from GNSS (course over ground, dual antenna) lowers the yaw RMSE
-/// of the position-only loose filter by more than 60 % (measured 74-76 %; the paper
-/// reports 83 %, docs/RESULTS.md §6).
+/// Seed 001: heading from GNSS lowers the yaw RMSE of the position-only loose filter:
+/// the dual antenna by more than 80 % (measured 88 %; the paper reports 83 %), the
+/// course over ground by more than 50 % (measured 58 %). Before the time-line fix
+/// (issue 15) the heading records at GNSS epochs integrated IMU increments twice in
+/// every variant: dual antenna 70 %, course 65 % against an inflated loose baseline
+/// (docs/RESULTS.md §6).
 #[test]
 fn seed001_gnss_heading_improves_yaw() {
     let r = reproduce("seed001", "2");
     let y0 = mean(&per_seed(&r, "loose", "rmse_yaw_deg"));
-    for v in ["course", "dual_antenna"] {
+    for (v, min) in [("course", 0.5), ("dual_antenna", 0.8)] {
         let y1 = mean(&per_seed(&r, v, "rmse_yaw_deg"));
         eprintln!("seed001 yaw {y0:.3} -> {y1:.3} deg with {v}");
         assert!(
-            (y0 - y1) / y0 > 0.6,
+            (y0 - y1) / y0 > min,
             "{v}: yaw improvement {}",
             (y0 - y1) / y0
         );

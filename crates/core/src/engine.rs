@@ -151,6 +151,9 @@ pub struct RunSummary {
     /// Per aiding source (Aiding::name): updates applied and rejected by their test.
     pub aiding_used: BTreeMap<&'static str, usize>,
     pub aiding_rejected: BTreeMap<&'static str, usize>,
+    /// Per aiding source: sums of the normalised innovation squared of the applied
+    /// updates and of their rows (mean NIS per row = 1 for a consistent filter).
+    pub aiding_nis: BTreeMap<&'static str, (f64, usize)>,
     /// Time spent static according to the detector [s].
     pub static_s: f64,
     /// Final GNSS-IMU time offset at `last_t` and its 1-sigma [s], when estimated.
@@ -611,7 +614,9 @@ impl Navigator {
             None => None,
         };
         match self.filter.update(&lin.y, &lin.h, &lin.r, gate) {
-            UpdateOutcome::Applied { dx, .. } => {
+            UpdateOutcome::Applied { dx, nis } => {
+                let e = self.summary.aiding_nis.entry(name).or_default();
+                *e = (e.0 + nis, e.1 + lin.y.len());
                 if let (Some(six), Some(k)) = (self.six_state.as_mut(), gain) {
                     six.on_dr_update(&k, &lin.h);
                 }
