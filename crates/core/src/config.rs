@@ -113,6 +113,57 @@ pub struct GnssOptions {
     pub outages: OutageSchedule,
     /// How loosely coupled fixes are fused (error-state filter or six-state cascade).
     pub fusion: GnssFusion,
+    /// Error model of the fixes and the handling of disagreeing ones (fix_error.rs).
+    pub fix_error: FixErrorOptions,
+}
+
+/// The loosely coupled fixes' error model and outlier handling (fix_error.rs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FixErrorOptions {
+    /// Correlation time of the fixes' position errors [s] (Gauss-Markov states);
+    /// 0 = white errors.
+    pub corr_time_s: f64,
+    /// Share of each fix's position variance that is time-correlated, in [0, 1).
+    pub corr_fraction: f64,
+    /// Accepted fixes in the adaptive variance-scale window; 0 = off.
+    pub adaptive_window: usize,
+    /// Tail probability beyond which a fix is down-weighted (IGG-III, up to the
+    /// gate); None = full weight up to the gate.
+    pub robust_probability: Option<f64>,
+    /// After a gate-rejection streak whose fixes agree with each other for this long
+    /// [s], the filter re-admits them (its position and velocity uncertainty widened
+    /// to the disagreement); a shorter burst stays rejected.
+    pub readmit_s: f64,
+}
+
+impl Default for FixErrorOptions {
+    fn default() -> Self {
+        FixErrorOptions {
+            corr_time_s: 60.0,
+            corr_fraction: 0.5,
+            adaptive_window: 60,
+            robust_probability: Some(0.01),
+            readmit_s: 30.0,
+        }
+    }
+}
+
+impl FixErrorOptions {
+    /// White fixes, no adaptation, no down-weighting (KF-GINS).
+    pub fn white() -> Self {
+        FixErrorOptions {
+            corr_time_s: 0.0,
+            corr_fraction: 0.0,
+            adaptive_window: 0,
+            robust_probability: None,
+            ..Self::default()
+        }
+    }
+
+    /// The Gauss-Markov states are in use.
+    pub fn correlated(&self) -> bool {
+        self.corr_time_s > 0.0 && self.corr_fraction > 0.0
+    }
 }
 
 /// How loosely coupled GNSS fixes are fused.
@@ -204,6 +255,9 @@ impl Default for TightOptions {
 
 /// Default `GnssOptions::gate_timeout_s` [s].
 pub const DEFAULT_GATE_TIMEOUT_S: f64 = 5.0;
+
+/// Default innovation gate of loosely coupled fixes (3 dof tail probability).
+pub const DEFAULT_FIX_GATE_PROBABILITY: f64 = 1e-4;
 
 /// Default covariance propagation interval [s]. Propagating every 0.2 s instead of
 /// every IMU sample changes the KF-GINS stand-in results by < 0.001 mm and 4e-5 deg

@@ -22,6 +22,7 @@ use crate::config::{AttitudeInit, GnssFusion, NavConfig, NhcMode, RangeRate};
 use crate::earth::{c_ne, lla_add_ned, lla_diff_ned, lla_to_ecef};
 use crate::error_model::{fill_f, fill_qc, Discretizer, MeanMotion};
 use crate::filter::{chi2_threshold, Eskf, UpdateOutcome};
+use crate::fix_error::{igg3_factor, AdaptiveScale, FixBias, RejectStreak};
 use crate::integrity::{
     EpochCheck, IntegrityMonitor, IntegrityReference, IntegrityState, StepInput, Transition,
 };
@@ -50,6 +51,14 @@ pub enum Event {
     Singular { t: f64, source: &'static str },
     /// Fixes had been rejected for `streak_s` seconds; this one was used ungated.
     GateBypassed { t: f64, streak_s: f64 },
+    /// Loose coupling: fixes rejected for `streak_s` seconds had agreed with each
+    /// other for `gnss.readmit_s`; the filter widened its uncertainty by their
+    /// disagreement `offset_m` and took this one.
+    GnssReadmitted {
+        t: f64,
+        streak_s: f64,
+        offset_m: f64,
+    },
     /// Tight coupling: no pseudorange had been fused for `gap_s` seconds (outage,
     /// rejection streak, or dead reckoning under the integrity monitor); the single
     /// point fix was fused without the gate before the pseudoranges.
@@ -91,6 +100,10 @@ impl std::fmt::Display for Event {
             Event::GateBypassed { t, streak_s } => write!(
                 f,
                 "{t:.3} gnss fix used without the gate: fixes rejected for {streak_s:.1} s (gate timeout)"
+            ),
+            Event::GnssReadmitted { t, streak_s, offset_m } => write!(
+                f,
+                "{t:.3} gnss fixes re-admitted: rejected for {streak_s:.1} s but consistent with each other; the INS was {offset_m:.2} m away"
             ),
             Event::TightFixUngated { t, gap_s } => write!(
                 f,
@@ -203,9 +216,15 @@ pub struct Navigator {
     w_ib_b: Vector3<f64>,
     /// Acceleration d(v^n)/dt over the last IMU interval [m/s²].
     a_n: Vector3<f64>,
-    gate3: Option<f64>,
-    /// Time of the first of the current run of gate-rejected fixes.
+    /// Time of the first of the current run of gate-rejected fixes (six-state).
     reject_streak_since: Option<f64>,
+    /// Loose coupling: the current run of gate-rejected fixes (fix_error.rs).
+    fix_streak: Option<RejectStreak>,
+    /// Time-correlated fix error (with the `GnssBias` block) and the adaptive
+    /// variance scales of fix position and velocity (fix_error.rs).
+    fix_bias: FixBias,
+    fix_pos_scale: AdaptiveScale,
+    fix_vel_scale: AdaptiveScale,
     /// Time of the last GNSS fix used (GNSS time) for the NHC outage mode.
     last_gnss_used_t: f64,
     /// Previous fix (course from displacement when fixes carry no velocity).
@@ -322,6 +341,9 @@ impl Navigator {
         if cfg.tight.enabled {
             layout.push(Block::ClockBias);
             layout.push(Block::ClockDrift);
+        } else if cfg.gnss.fix_error.correlated() && cfg.gnss.fusion == GnssFusion::ErrorState {
+            // Its variance is set from the first fix's std (set_fix_bias_sigma).
+            layout.push(Block::GnssBias);
         }
         let n = layout.len();
         let ini = &cfg.initial;
@@ -365,7 +387,6 @@ impl Navigator {
             v_n,
             q_bn: q_bn_from_euler(&rpy),
         };
-        let gate3 = chi2_gate(3, cfg.gnss.gate_probability);
         Navigator {
             cfg: cfg.clone(),
             filter: Eskf::new(DMatrix::from_diagonal(&p0)),
@@ -384,8 +405,11 @@ impl Navigator {
             acc: Accum::default(),
             w_ib_b: Vector3::zeros(),
             a_n: Vector3::zeros(),
-            gate3,
             reject_streak_since: None,
+            fix_streak: None,
+            fix_bias: FixBias::default(),
+            fix_pos_scale: AdaptiveScale::new(cfg.gnss.fix_error.adaptive_window),
+            fix_vel_scale: AdaptiveScale::new(cfg.gnss.fix_error.adaptive_window),
             last_gnss_used_t: t0,
             prev_fix: None,
             detector: StaticDetector::new(cfg.zupt.window_s),
@@ -580,6 +604,15 @@ impl Navigator {
             &self.cfg.imu_noise,
             &rw,
         );
+        if let Some(i) = self.layout.index(Block::GnssBias) {
+            // First-order Gauss-Markov fix error (fix_error.rs).
+            let tau = self.cfg.gnss.fix_error.corr_time_s;
+            for k in 0..3 {
+                self.disc.f[(i + k, i + k)] = -1.0 / tau;
+                self.disc.qc[(i + k, i + k)] = 2.0 * self.fix_bias.sigma_ned_m[k].powi(2) / tau;
+            }
+            self.fix_bias.propagate(a.dt, tau);
+        }
         self.disc.discretize(a.dt);
         self.filter.predict(&self.disc.phi, &self.disc.qd);
         if let Some(six) = self.six_state.as_mut() {
@@ -598,6 +631,11 @@ impl Navigator {
         let Some(lin) = aiding.linearize(&ctx) else {
             return Fused::NotApplicable;
         };
+        self.fuse_linearized(&aiding, &lin, gate)
+    }
+
+    /// Fuse an already linearised measurement of `aiding` (the covariance flushed).
+    fn fuse_linearized(&mut self, aiding: &Aiding, lin: &Linearized, gate: Option<f64>) -> Fused {
         let logged = matches!(
             aiding,
             Aiding::GnssPosition(_)
@@ -647,6 +685,69 @@ impl Navigator {
         }
     }
 
+    /// A loosely coupled fix row (position or velocity): the reported variance scaled
+    /// by `scale` (white share x adaptive factor), the gate, and IGG-III
+    /// down-weighting between the robust threshold and the gate (fix_error.rs).
+    /// Returns what was done, the innovation and diag(H P H^T) before the update.
+    fn fuse_fix_row(
+        &mut self,
+        aiding: Aiding,
+        scale: f64,
+        gate_p: Option<f64>,
+    ) -> (Fused, Option<(DVector<f64>, Vec<f64>)>) {
+        self.flush_covariance();
+        let ctx = self.context(self.tight.clock);
+        let Some(mut lin) = aiding.linearize(&ctx) else {
+            return (Fused::NotApplicable, None);
+        };
+        lin.r *= scale;
+        let dof = lin.y.len();
+        let hph: Vec<f64> = (0..dof)
+            .map(|i| {
+                let row = lin.h.row(i);
+                (row * &self.filter.p * row.transpose())[(0, 0)]
+            })
+            .collect();
+        let seen = Some((lin.y.clone(), hph));
+        let gate = chi2_gate(dof, gate_p);
+        if let (Some(g), Some(p0), Some(nis)) = (
+            gate,
+            self.cfg.gnss.fix_error.robust_probability,
+            self.filter.nis(&lin.y, &lin.h, &lin.r),
+        ) {
+            let k0 = (chi2_threshold(dof, p0) / dof as f64).sqrt();
+            let k1 = (g / dof as f64).sqrt();
+            let w = igg3_factor((nis / dof as f64).sqrt(), k0, k1);
+            if w > 0.0 && w < 1.0 {
+                lin.r /= w;
+                // Down-weighted, not rejected: the gate already passed.
+                return (self.fuse_linearized(&aiding, &lin, None), seen);
+            }
+        }
+        (self.fuse_linearized(&aiding, &lin, gate), seen)
+    }
+
+    /// The correlated share of this fix's variance drives the Gauss-Markov states; a
+    /// much better fix (a new solution type) bounds them anew.
+    fn set_fix_bias_sigma(&mut self, std_ned_m: &Vector3<f64>) {
+        let Some(i) = self.layout.index(Block::GnssBias) else {
+            return;
+        };
+        let rho = self.cfg.gnss.fix_error.corr_fraction;
+        let sigma = std_ned_m * rho.sqrt();
+        for k in 0..3 {
+            let var = sigma[k].powi(2);
+            let p = self.filter.p[(i + k, i + k)];
+            if self.fix_bias.sigma_ned_m[k] == 0.0 || p > 2.0 * var {
+                if p > 0.0 {
+                    self.fix_bias.bias_ned_m[k] *= (var / p).sqrt();
+                }
+                self.filter.reset_state(i + k, var);
+            }
+        }
+        self.fix_bias.sigma_ned_m = sigma;
+    }
+
     /// What the aiding models see of the current solution.
     fn context(&self, clock: ReceiverClock) -> AidingContext<'_> {
         AidingContext {
@@ -657,6 +758,7 @@ impl Navigator {
             lever_arm_b: self.cfg.gnss.lever_arm_b,
             vehicle: self.vehicle,
             clock,
+            gnss_bias_ned_m: self.fix_bias.bias_ned_m,
         }
     }
 
@@ -700,6 +802,9 @@ impl Navigator {
         if let Some(i) = self.layout.index(Block::ClockBias) {
             self.tight.clock.bias_m -= dx[i];
             self.tight.clock.drift_mps -= dx[i + 1];
+        }
+        if let Some(i) = self.layout.index(Block::GnssBias) {
+            self.fix_bias.bias_ned_m -= Vector3::new(dx[i], dx[i + 1], dx[i + 2]);
         }
         // TDCP: the displacement since the previous epoch is the mechanization's only.
         self.tight.last_imu_ecef_m = lla_to_ecef(&self.nav.lla);
@@ -775,10 +880,11 @@ impl Navigator {
             f.vel_std_ned = Some(s);
         }
         let use_vel = g.use_velocity;
-        let mut gate = self.gate3;
+        let fe = g.fix_error;
+        let mut gate_p = g.gate_probability;
         if self.monitor.is_some() {
-            // The monitor replaces the gate (and its timeout, which would re-admit a
-            // spoofer): it tests the fix against the INS/odometer prediction.
+            // The monitor replaces the gate (and its re-admission, which would let a
+            // spoofer in): it tests the fix against the INS/odometer prediction.
             // Position and (when fused) velocity jointly against the prediction.
             let pos = Aiding::GnssPosition(&f);
             let mut rows = vec![pos];
@@ -789,30 +895,61 @@ impl Navigator {
                 self.summary.gnss_rejected += 1;
                 return;
             }
-            gate = None;
+            gate_p = None;
         }
-        if let (Some(t0), Some(_)) = (self.reject_streak_since, gate) {
-            if fix.t - t0 >= self.cfg.gnss.gate_timeout_s {
-                gate = None;
-                self.summary.events.push(Event::GateBypassed {
+        self.set_fix_bias_sigma(&f.std_ned);
+        let white = if self.layout.index(Block::GnssBias).is_some() {
+            1.0 - fe.corr_fraction
+        } else {
+            1.0
+        };
+        // Rejected fixes that have agreed with each other for readmit_s: the INS has
+        // drifted (or the GNSS stepped for good); widen its uncertainty to take them.
+        if let (Some(st), Some(_)) = (self.fix_streak, gate_p) {
+            if st.agreed_for(fix.t, fe.readmit_s) {
+                let y = st.last_innovation();
+                let span = (fix.t - st.since).max(1.0);
+                for k in 0..3 {
+                    self.filter.p[(POS + k, POS + k)] += y[k].powi(2);
+                    self.filter.p[(VEL + k, VEL + k)] += (y[k] / span).powi(2);
+                }
+                self.summary.events.push(Event::GnssReadmitted {
                     t: fix.t,
-                    streak_s: fix.t - t0,
+                    streak_s: fix.t - st.since,
+                    offset_m: y.norm(),
                 });
+                self.fix_streak = None;
             }
         }
-        let used = self.fuse(Aiding::GnssPosition(&f), gate) == Fused::Applied;
+        let pos_scale = white * self.fix_pos_scale.scale();
+        let (fused, seen) = self.fuse_fix_row(Aiding::GnssPosition(&f), pos_scale, gate_p);
+        let used = fused == Fused::Applied;
+        if let (true, Some((y, hph))) = (used, &seen) {
+            let r: Vec<f64> = f.std_ned.iter().map(|s| s * s * pos_scale).collect();
+            self.fix_pos_scale.observe(y.as_slice(), hph, &r);
+        }
         if used {
             self.summary.gnss_used += 1;
-            self.reject_streak_since = None;
+            self.fix_streak = None;
             self.last_gnss_used_t = fix.t;
         } else {
             self.summary.gnss_rejected += 1;
-            if gate.is_some() {
-                self.reject_streak_since.get_or_insert(fix.t);
+            if let (Fused::Rejected, Some((y, _))) = (fused, &seen) {
+                let y = Vector3::new(y[0], y[1], y[2]);
+                let vel_std = self.vel_std_ned_mps();
+                match self.fix_streak.as_mut() {
+                    Some(st) => st.push(fix.t, y, f.std_ned, vel_std),
+                    None => self.fix_streak = Some(RejectStreak::new(fix.t, y, f.std_ned)),
+                }
             }
         }
-        if use_vel && f.vel_ned.is_some() {
-            self.fuse(Aiding::GnssVelocity(&f), gate);
+        if let (true, Some(vstd)) = (use_vel, f.vel_std_ned) {
+            let vel_scale = self.fix_vel_scale.scale();
+            let (fv, seen) = self.fuse_fix_row(Aiding::GnssVelocity(&f), vel_scale, gate_p);
+            if let (Fused::Applied, Some((y, hph))) = (fv, &seen) {
+                let r: Vec<f64> = vstd.iter().map(|s| s * s * vel_scale).collect();
+                self.fix_vel_scale.observe(y.as_slice(), hph, &r);
+            }
         }
         if self.cfg.heading.course_over_ground && used {
             if let Some(obs) = self.course_from(&f) {
@@ -1910,6 +2047,7 @@ mod tests {
                 gate_timeout_s: DEFAULT_GATE_TIMEOUT_S,
                 outages: OutageSchedule::default(),
                 fusion: GnssFusion::ErrorState,
+                fix_error: crate::config::FixErrorOptions::white(),
             },
             filter: FilterOptions {
                 covariance_period_s: 0.0,

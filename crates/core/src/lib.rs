@@ -15,6 +15,7 @@ pub mod engine;
 pub mod error_model;
 pub mod eval;
 pub mod filter;
+pub mod fix_error;
 pub mod integrity;
 pub mod mechanization;
 pub mod outage;

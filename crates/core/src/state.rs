@@ -34,6 +34,9 @@ pub enum Block {
     ClockBias,
     /// Receiver clock drift c dt_r' [m/s] (seed 000 eq. 23-28).
     ClockDrift,
+    /// Time-correlated error of the loosely coupled GNSS fixes, NED [m]
+    /// (fix_error.rs), b_est - b_true.
+    GnssBias,
 }
 
 impl Block {

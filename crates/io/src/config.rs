@@ -16,9 +16,10 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::Vector3;
 use navfuse_core::config::{
-    AttitudeInit, FilterOptions, GnssFusion, GnssOptions, HeadingOptions, ImuNoise, InitialState,
-    NavConfig, NhcMode, NhcOptions, OdometerOptions, RangeRate, TightOptions, TimeOffsetConfig,
-    VehicleOptions, ZuptOptions, DEFAULT_COVARIANCE_PERIOD_S, DEFAULT_GATE_TIMEOUT_S,
+    AttitudeInit, FilterOptions, FixErrorOptions, GnssFusion, GnssOptions, HeadingOptions,
+    ImuNoise, InitialState, NavConfig, NhcMode, NhcOptions, OdometerOptions, RangeRate,
+    TightOptions, TimeOffsetConfig, VehicleOptions, ZuptOptions, DEFAULT_COVARIANCE_PERIOD_S,
+    DEFAULT_FIX_GATE_PROBABILITY, DEFAULT_GATE_TIMEOUT_S,
 };
 use navfuse_core::integrity::{IntegrityOptions, IntegrityReference};
 use navfuse_core::outage::{OutageSchedule, Periodic, Window};
@@ -759,9 +760,19 @@ struct TGnss {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     velocity_std_mps: Option<Num3>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    gate_probability: Option<f64>,
+    gate_probability: Option<Gate>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     gate_timeout_s: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    error_corr_time_s: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    error_corr_fraction: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    adaptive_window: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    robust_probability: Option<Gate>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    readmit_s: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     outages: Option<Vec<Vec<f64>>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -1208,6 +1219,7 @@ fn convert(raw: TomlRoot, base: &Path) -> KResult<Converted> {
                 gate_timeout_s: DEFAULT_GATE_TIMEOUT_S,
                 outages: OutageSchedule::default(),
                 fusion: GnssFusion::ErrorState,
+                fix_error: FixErrorOptions::default(),
             },
             Vec::new(),
             TightOptions::default(),
@@ -2175,16 +2187,55 @@ fn convert_gnss(
         .as_ref()
         .map(|v| std3("gnss.velocity_std_mps", v).map(vec3))
         .transpose()?;
-    let gate_probability = match g.gate_probability {
-        None => None,
-        Some(p) if p.is_finite() && p >= 1e-15 && p < 0.5 => Some(p),
-        Some(p) => {
-            return Err(kerr(
-                "gnss.gate_probability",
-                format!("expected a probability in [1e-15, 0.5), e.g. 1e-4, got {p}"),
-            ))
-        }
+    let gate_probability = gate(
+        "gnss.gate_probability",
+        g.gate_probability,
+        Some(DEFAULT_FIX_GATE_PROBABILITY),
+    )?;
+    let fd = FixErrorOptions::default();
+    let fix_error = FixErrorOptions {
+        corr_time_s: opt_or(
+            "gnss.error_corr_time_s",
+            g.error_corr_time_s,
+            non_negative,
+            same,
+            fd.corr_time_s,
+        )?,
+        corr_fraction: match g.error_corr_fraction {
+            None => fd.corr_fraction,
+            Some(r) if (0.0..1.0).contains(&r) => r,
+            Some(r) => {
+                return Err(kerr(
+                    "gnss.error_corr_fraction",
+                    format!("expected a share of the fix variance in [0, 1), e.g. 0.5, got {r}"),
+                ))
+            }
+        },
+        adaptive_window: match g.adaptive_window {
+            None => fd.adaptive_window,
+            Some(w) if w >= 0.0 && w <= 1e6 && w.fract() == 0.0 => w as usize,
+            Some(w) => {
+                return Err(kerr(
+                    "gnss.adaptive_window",
+                    format!("expected a whole number of fixes in [0, 1000000] (0 = off), got {w}"),
+                ))
+            }
+        },
+        robust_probability: gate(
+            "gnss.robust_probability",
+            g.robust_probability,
+            fd.robust_probability,
+        )?,
+        readmit_s: opt_or("gnss.readmit_s", g.readmit_s, positive, same, fd.readmit_s)?,
     };
+    if let (Some(r), Some(gp)) = (fix_error.robust_probability, gate_probability) {
+        if r <= gp {
+            return Err(kerr(
+                "gnss.robust_probability",
+                format!("must be larger than gnss.gate_probability ({gp}): down-weighting starts before the gate rejects; got {r}"),
+            ));
+        }
+    }
 
     let gate_timeout_s = positive(
         "gnss.gate_timeout_s",
@@ -2310,6 +2361,7 @@ fn convert_gnss(
         gate_timeout_s,
         outages,
         fusion,
+        fix_error,
     };
     Ok((src, opts, relative, tight))
 }
@@ -2547,6 +2599,11 @@ impl TGnss {
             velocity_std_mps: None,
             gate_probability: None,
             gate_timeout_s: None,
+            error_corr_time_s: None,
+            error_corr_fraction: None,
+            adaptive_window: None,
+            robust_probability: None,
+            readmit_s: None,
             outages: None,
             outage_every: None,
             fusion: None,
@@ -2715,8 +2772,13 @@ fn to_raw(c: &RunConfig) -> TomlRoot {
                 .velocity_std_override
                 .as_ref()
                 .map(|v| Num3::from3(arr3(v))),
-            gate_probability: go.gate_probability,
+            gate_probability: Some(Gate::from_option(go.gate_probability)),
             gate_timeout_s: Some(go.gate_timeout_s),
+            error_corr_time_s: Some(go.fix_error.corr_time_s),
+            error_corr_fraction: Some(go.fix_error.corr_fraction),
+            adaptive_window: Some(go.fix_error.adaptive_window as f64),
+            robust_probability: Some(Gate::from_option(go.fix_error.robust_probability)),
+            readmit_s: Some(go.fix_error.readmit_s),
             outages: (!go.outages.windows.is_empty()).then(|| {
                 go.outages
                     .windows
@@ -3279,8 +3341,13 @@ fn kfgins_to_raw(y: KfYaml, w: &mut Vec<String>) -> KResult<(TomlRoot, Option<St
             use_velocity: Some(true),
             position_std_m: None,
             velocity_std_mps: None,
-            gate_probability: None,
+            // KF-GINS: white fixes, no gate, no down-weighting (its results).
+            gate_probability: Some(Gate::Off),
             gate_timeout_s: None,
+            error_corr_time_s: Some(0.0),
+            error_corr_fraction: Some(0.0),
+            adaptive_window: Some(0.0),
+            robust_probability: Some(Gate::Off),
             outages: None,
             outage_every: None,
             ..TGnss::no_rinex()

@@ -5,7 +5,8 @@
 //!   R     = diag(std_N², std_E², std_D²)
 //!
 //! dtau (optional state) is the GNSS-IMU time-offset error: a fix applied dtau too
-//! late sees the antenna displaced by v_ant * dtau.
+//! late sees the antenna displaced by v_ant * dtau. With the `GnssBias` block
+//! (fix_error.rs) the fix is r_ant + b + v: y gains + b_est and H an identity column.
 
 use super::{AidingContext, Linearized};
 use crate::attitude::skew;
@@ -30,8 +31,12 @@ pub fn antenna_position_jacobian(ctx: &AidingContext) -> (Vector3<f64>, DMatrix<
 }
 
 pub fn linearize(ctx: &AidingContext, fix: &GnssFix) -> Linearized {
-    let (l_n, h) = antenna_position_jacobian(ctx);
-    let y3 = lla_diff_ned(&ctx.nav.lla, &fix.lla) + l_n;
+    let (l_n, mut h) = antenna_position_jacobian(ctx);
+    let mut y3 = lla_diff_ned(&ctx.nav.lla, &fix.lla) + l_n;
+    if let Some(i) = ctx.layout.index(Block::GnssBias) {
+        y3 += ctx.gnss_bias_ned_m;
+        h.view_mut((0, i), (3, 3)).copy_from(&Matrix3::identity());
+    }
     let r = DMatrix::from_diagonal(&DVector::from_iterator(
         3,
         fix.std_ned.iter().map(|s| s * s),

@@ -52,6 +52,9 @@ pub struct AidingContext<'a> {
     pub lever_arm_b: Vector3<f64>,
     pub vehicle: VehicleEstimate,
     pub clock: ReceiverClock,
+    /// Estimated time-correlated error of the GNSS fixes, NED [m] (zero without the
+    /// `GnssBias` block).
+    pub gnss_bias_ned_m: Vector3<f64>,
 }
 
 /// A linearised measurement: innovation y = h(x_est) - z ~ H dx + v, v ~ N(0, R).
@@ -191,6 +194,7 @@ pub(crate) mod tests {
             lever_arm_b: Vector3::new(0.5, 0.1, -1.0),
             vehicle: v.0,
             clock: v.1,
+            gnss_bias_ned_m: Vector3::zeros(),
         }
     }
 
