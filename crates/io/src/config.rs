@@ -27,7 +27,7 @@ use serde::de::{self, IgnoredAny, MapAccess, SeqAccess, Visitor};
 use serde::ser::SerializeSeq;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
-use crate::error::{check_finite_si, check_scale};
+use crate::error::{check_finite_si, check_scale, SCALE_MAX_SI};
 use crate::input::{
     AccelUnit, Coupling, CsvImuOptions, DgpsKind, DgpsSource, GapPolicy, GnssFormat, GnssSource,
     GyroUnit, HeadingSource, ImuFormat, ImuQuantity, ImuSource, OdometerFormat, OdometerSource,
@@ -1297,6 +1297,12 @@ fn convert(raw: TomlRoot, base: &Path) -> KResult<Converted> {
         (None, Some(al)) => convert_alignment(al)?,
         (Some(att), None) => {
             let att = v3("initial.attitude_deg", att)?;
+            if let Some(a) = att.iter().find(|a| a.abs() > 360.0) {
+                return Err(kerr(
+                    "initial.attitude_deg",
+                    format!("expected angles within [-360, 360] deg, got {a}"),
+                ));
+            }
             if !(-90.0..=90.0).contains(&att[1]) {
                 return Err(kerr(
                     "initial.attitude_deg",
@@ -1306,10 +1312,15 @@ fn convert(raw: TomlRoot, base: &Path) -> KResult<Converted> {
             AttitudeInit::Given(vec3(map3(att, |x| x * D2R)))
         }
     };
+    // Initial IMU errors: finite, and bounded so that they convert back and forth.
     let opt3 = |key: &str, v: &Option<Num3>| -> KResult<[f64; 3]> {
-        match v {
-            Some(v) => n3(key, v),
-            None => Ok([0.0; 3]),
+        let a = match v {
+            Some(v) => n3(key, v)?,
+            None => [0.0; 3],
+        };
+        match a.iter().find(|x| x.abs() > SCALE_MAX_SI) {
+            Some(x) => Err(kerr(key, format!("expected |value| <= 1e150, got {x}"))),
+            None => Ok(a),
         }
     };
     let imu_errors = ImuErrors {
@@ -2847,8 +2858,8 @@ fn to_raw(c: &RunConfig) -> TomlRoot {
             initial_s: Some(t.initial_s),
             std_s: (t.std_s > 0.0).then_some(t.std_s),
             random_walk: Some(t.random_walk),
-            initial_rate_ppm: Some(t.initial_rate * 1e6),
-            rate_std_ppm: Some(t.rate_std * 1e6),
+            initial_rate_ppm: Some(tidy(t.initial_rate * 1e6)),
+            rate_std_ppm: Some(tidy(t.rate_std * 1e6)),
         }),
     };
     let v = &c.nav.vehicle;
