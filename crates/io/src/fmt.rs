@@ -26,8 +26,6 @@ pub struct LineReader {
     line_no: usize,
     /// The line last returned ended with `\n`.
     line_end: bool,
-    /// The end of the file was reached (`next_line` gave None).
-    eof: bool,
 }
 
 impl LineReader {
@@ -45,7 +43,6 @@ impl LineReader {
             buf: Vec::with_capacity(256),
             line_no: 0,
             line_end: true,
-            eof: false,
         })
     }
 
@@ -71,7 +68,6 @@ impl LineReader {
             .read_until(b'\n', &mut self.buf)
             .map_err(|e| InputError::read(&self.path, &e).with_line(self.line_no + 1))?;
         if n == 0 {
-            self.eof = true;
             return Ok(None);
         }
         self.line_no += 1;
@@ -148,12 +144,6 @@ impl LineReader {
                 .fill_buf()
                 .map(|b| b.is_empty())
                 .unwrap_or(false)
-    }
-
-    /// True when a multi-line record was cut by the end of the file: it ended inside
-    /// the record, or the record's current line is a last line cut mid-write.
-    pub fn damaged_end(&mut self) -> bool {
-        self.eof || self.cut_last_line()
     }
 }
 

@@ -306,7 +306,7 @@ pub fn read_rinex_nav(path: &Path) -> Result<RinexNav, InputError> {
     // Records. A last record cut by the end of the file is dropped with a warning.
     match read_records(&mut rd, path, v3, &mut nav) {
         Ok(()) => {}
-        Err(e) if rd.damaged_end() => nav.warnings.push(e.last_line_warning()),
+        Err(e) if rd.cut_last_line() => nav.warnings.push(e.last_line_warning()),
         Err(e) => return Err(e),
     }
     Ok(nav)

@@ -383,7 +383,7 @@ pub fn read_rinex_obs_report(path: &Path) -> Result<RinexObsRead, InputError> {
     let mut records = false;
     match body(&mut rd, path, &mut out.epochs, &mut records) {
         Ok(()) => {}
-        Err(e) if records && rd.damaged_end() => out.warnings.push(e.last_line_warning()),
+        Err(e) if records && rd.cut_last_line() => out.warnings.push(e.last_line_warning()),
         Err(e) => return Err(e),
     }
     for (k, w) in out.epochs.windows(2).enumerate() {
