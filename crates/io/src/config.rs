@@ -28,10 +28,11 @@ use serde::de::{self, IgnoredAny, MapAccess, SeqAccess, Visitor};
 use serde::ser::SerializeSeq;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
+use crate::error::{check_finite_si, check_scale, SCALE_MAX_SI};
 use crate::input::{
-    AccelUnit, Coupling, CsvImuOptions, DgpsKind, DgpsSource, GnssFormat, GnssSource, GyroUnit,
-    HeadingSource, ImuFormat, ImuQuantity, ImuSource, OdometerFormat, OdometerSource, OutputSpec,
-    RateSampling, RinexGnss, RtklibExplorerImuOptions, TimeScale, TimeUnit,
+    AccelUnit, Coupling, CsvImuOptions, DgpsKind, DgpsSource, GapPolicy, GnssFormat, GnssSource,
+    GyroUnit, HeadingSource, ImuFormat, ImuQuantity, ImuSource, OdometerFormat, OdometerSource,
+    OutputSpec, RateSampling, RinexGnss, RtklibExplorerImuOptions, TimeScale, TimeUnit,
 };
 
 // ---------------------------------------------------------------------------------
@@ -570,7 +571,19 @@ struct TImu {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     tag_file: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    gap_policy: Option<TGapPolicy>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    max_bridge_s: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     csv: Option<TCsv>,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+enum TGapPolicy {
+    #[serde(rename = "bridge")]
+    Bridge,
+    #[serde(rename = "nominal")]
+    Nominal,
 }
 
 #[derive(Clone, Copy, Debug, Deserialize, Serialize)]
@@ -1078,12 +1091,25 @@ fn finite(key: &str, v: f64) -> KResult<f64> {
     }
 }
 
+/// A std, variance, rate, scale or duration: > 0, square finite and non-zero
+/// (`check_scale`).
 fn positive(key: &str, v: f64) -> KResult<f64> {
-    if v.is_finite() && v > 0.0 {
-        Ok(v)
-    } else {
-        Err(kerr(key, format!("expected a number > 0, got {v}")))
+    positive_si(key, v, v)
+}
+
+/// `v` (file units) that is `si` in SI units, checked as [`positive`] after conversion.
+fn positive_si(key: &str, v: f64, si: f64) -> KResult<f64> {
+    check_scale("the value", v, si).map_err(|m| kerr(key, format!("expected a number > 0: {m}")))
+}
+
+/// The SI values of a 3-vector std (`std3`), each checked after conversion.
+fn std3_si(key: &str, v: [f64; 3], to_si: fn(f64) -> f64) -> KResult<Vector3<f64>> {
+    let mut out = [0.0; 3];
+    for (i, (o, x)) in out.iter_mut().zip(v).enumerate() {
+        *o = check_scale("a standard deviation", x, to_si(x))
+            .map_err(|m| kerr(key, format!("element {i}: {m}")))?;
     }
+    Ok(vec3(out))
 }
 
 fn non_negative(key: &str, v: f64) -> KResult<f64> {
@@ -1120,20 +1146,18 @@ fn n3(key: &str, v: &Num3) -> KResult<[f64; 3]> {
     }
 }
 
-/// A std: scalar or 3-vector, every element > 0.
+/// A std: scalar or 3-vector, every element > 0 with a finite non-zero square
+/// (`check_scale`; [`std3_si`] checks again after conversion).
 fn std3(key: &str, v: &Num3) -> KResult<[f64; 3]> {
     let a = n3(key, v)?;
     for (i, x) in a.iter().enumerate() {
-        if *x <= 0.0 {
+        if let Err(m) = check_scale("a standard deviation", *x, *x) {
             let what = if matches!(v, Num3::Scalar(_)) {
                 String::new()
             } else {
                 format!("element {i}: ")
             };
-            return Err(kerr(
-                key,
-                format!("{what}a standard deviation must be > 0, got {x}"),
-            ));
+            return Err(kerr(key, format!("{what}{m}")));
         }
     }
     Ok(a)
@@ -1234,15 +1258,19 @@ fn convert(raw: TomlRoot, base: &Path) -> KResult<Converted> {
     let ab = std3("imu_noise.accel_bias_std_mgal", &n.accel_bias_std_mgal)?;
     let gs = std3("imu_noise.gyro_scale_std_ppm", &n.gyro_scale_std_ppm)?;
     let as_ = std3("imu_noise.accel_scale_std_ppm", &n.accel_scale_std_ppm)?;
-    let corr_h = positive("imu_noise.corr_time_h", n.corr_time_h)?;
+    let corr_time_s = positive_si(
+        "imu_noise.corr_time_h",
+        n.corr_time_h,
+        n.corr_time_h * 3600.0,
+    )?;
     let imu_noise = ImuNoise {
-        arw: vec3(map3(arw, arw_si)),
-        vrw: vec3(map3(vrw, vrw_si)),
-        gyro_bias_std: vec3(map3(gb, degph_si)),
-        accel_bias_std: vec3(map3(ab, mgal_si)),
-        gyro_scale_std: vec3(map3(gs, ppm_si)),
-        accel_scale_std: vec3(map3(as_, ppm_si)),
-        corr_time_s: corr_h * 3600.0,
+        arw: std3_si("imu_noise.arw_deg_sqrth", arw, arw_si)?,
+        vrw: std3_si("imu_noise.vrw_mps_sqrth", vrw, vrw_si)?,
+        gyro_bias_std: std3_si("imu_noise.gyro_bias_std_degph", gb, degph_si)?,
+        accel_bias_std: std3_si("imu_noise.accel_bias_std_mgal", ab, mgal_si)?,
+        gyro_scale_std: std3_si("imu_noise.gyro_scale_std_ppm", gs, ppm_si)?,
+        accel_scale_std: std3_si("imu_noise.accel_scale_std_ppm", as_, ppm_si)?,
+        corr_time_s,
     };
 
     // [initial]
@@ -1291,6 +1319,12 @@ fn convert(raw: TomlRoot, base: &Path) -> KResult<Converted> {
         (None, Some(al)) => convert_alignment(al)?,
         (Some(att), None) => {
             let att = v3("initial.attitude_deg", att)?;
+            if let Some(a) = att.iter().find(|a| a.abs() > 360.0) {
+                return Err(kerr(
+                    "initial.attitude_deg",
+                    format!("expected angles within [-360, 360] deg, got {a}"),
+                ));
+            }
             if !(-90.0..=90.0).contains(&att[1]) {
                 return Err(kerr(
                     "initial.attitude_deg",
@@ -1300,10 +1334,15 @@ fn convert(raw: TomlRoot, base: &Path) -> KResult<Converted> {
             AttitudeInit::Given(vec3(map3(att, |x| x * D2R)))
         }
     };
+    // Initial IMU errors: finite, and bounded so that they convert back and forth.
     let opt3 = |key: &str, v: &Option<Num3>| -> KResult<[f64; 3]> {
-        match v {
-            Some(v) => n3(key, v),
-            None => Ok([0.0; 3]),
+        let a = match v {
+            Some(v) => n3(key, v)?,
+            None => [0.0; 3],
+        };
+        match a.iter().find(|x| x.abs() > SCALE_MAX_SI) {
+            Some(x) => Err(kerr(key, format!("expected |value| <= 1e150, got {x}"))),
+            None => Ok(a),
         }
     };
     let imu_errors = ImuErrors {
@@ -1330,35 +1369,55 @@ fn convert(raw: TomlRoot, base: &Path) -> KResult<Converted> {
             None => Ok(default),
         }
     };
+    let std_or_si = |key: &str, v: &Option<Num3>, default: [f64; 3], to_si| {
+        std3_si(key, std_or(key, v, default)?, to_si)
+    };
     let imu_errors_std = ImuErrors {
-        gyro_bias: vec3(map3(
-            std_or("initial.gyro_bias_std_degph", &i.gyro_bias_std_degph, gb)?,
+        gyro_bias: std_or_si(
+            "initial.gyro_bias_std_degph",
+            &i.gyro_bias_std_degph,
+            gb,
             degph_si,
-        )),
-        accel_bias: vec3(map3(
-            std_or("initial.accel_bias_std_mgal", &i.accel_bias_std_mgal, ab)?,
+        )?,
+        accel_bias: std_or_si(
+            "initial.accel_bias_std_mgal",
+            &i.accel_bias_std_mgal,
+            ab,
             mgal_si,
-        )),
-        gyro_scale: vec3(map3(
-            std_or("initial.gyro_scale_std_ppm", &i.gyro_scale_std_ppm, gs)?,
+        )?,
+        gyro_scale: std_or_si(
+            "initial.gyro_scale_std_ppm",
+            &i.gyro_scale_std_ppm,
+            gs,
             ppm_si,
-        )),
-        accel_scale: vec3(map3(
-            std_or("initial.accel_scale_std_ppm", &i.accel_scale_std_ppm, as_)?,
+        )?,
+        accel_scale: std_or_si(
+            "initial.accel_scale_std_ppm",
+            &i.accel_scale_std_ppm,
+            as_,
             ppm_si,
-        )),
+        )?,
     };
     let initial = InitialState {
         lla: pos.map(|pos| Vector3::new(pos[0] * D2R, pos[1] * D2R, pos[2])),
         v_n: vec3(vel),
         attitude,
         imu_errors,
-        pos_std: vec3(std3("initial.position_std_m", &i.position_std_m)?),
-        vel_std: vec3(std3("initial.velocity_std_mps", &i.velocity_std_mps)?),
-        att_std: vec3(map3(
+        pos_std: std3_si(
+            "initial.position_std_m",
+            std3("initial.position_std_m", &i.position_std_m)?,
+            same,
+        )?,
+        vel_std: std3_si(
+            "initial.velocity_std_mps",
+            std3("initial.velocity_std_mps", &i.velocity_std_mps)?,
+            same,
+        )?,
+        att_std: std3_si(
+            "initial.attitude_std_deg",
             std3("initial.attitude_std_deg", &i.attitude_std_deg)?,
-            |x| x * D2R,
-        )),
+            deg_si,
+        )?,
         imu_errors_std,
     };
 
@@ -1511,7 +1570,17 @@ fn opt_or(
     default: f64,
 ) -> KResult<f64> {
     match v {
-        Some(x) => Ok(to_si(check(key, x)?)),
+        Some(x) => {
+            let si = to_si(check(key, x)?);
+            check_finite_si(x, si).map_err(|m| kerr(key, m))?;
+            // The same check on the SI value (a positive std must stay a usable one).
+            check(key, si).map_err(|e| {
+                kerr(
+                    key,
+                    format!("{x} is {si:e} in SI units, out of range: {}", e.msg),
+                )
+            })
+        }
         None => Ok(default),
     }
 }
@@ -1526,14 +1595,7 @@ fn deg_si(x: f64) -> f64 {
 
 /// A std: > 0.
 fn std_pos(key: &str, v: f64) -> KResult<f64> {
-    if v.is_finite() && v > 0.0 {
-        Ok(v)
-    } else {
-        Err(kerr(
-            key,
-            format!("a standard deviation must be > 0, got {v}"),
-        ))
-    }
+    check_scale("a standard deviation", v, v).map_err(|m| kerr(key, m))
 }
 
 fn convert_alignment(al: &TAlignment) -> KResult<AttitudeInit> {
@@ -1801,7 +1863,10 @@ fn convert_heading(h: &THeading, base: &Path) -> KResult<(Option<HeadingSource>,
             }
             let std_override = h
                 .std_deg
-                .map(|s| std_pos("heading.std_deg", s).map(deg_si))
+                .map(|s| {
+                    check_scale("a standard deviation", s, deg_si(s))
+                        .map_err(|m| kerr("heading.std_deg", m))
+                })
                 .transpose()?;
             (Some(HeadingSource { path }), Some(vec3(b)), std_override)
         }
@@ -1995,6 +2060,22 @@ fn convert_imu(m: &TImu, base: &Path) -> KResult<ImuSource> {
         None => [0.0; 3],
     };
     let time_offset_s = finite("imu.time_offset_s", m.time_offset_s.unwrap_or(0.0))?;
+    let max_bridge_s = m
+        .max_bridge_s
+        .map(|x| positive("imu.max_bridge_s", x))
+        .transpose()?;
+    let gap_policy = match m.gap_policy.unwrap_or(TGapPolicy::Bridge) {
+        TGapPolicy::Bridge => GapPolicy::Bridge {
+            max_s: max_bridge_s,
+        },
+        TGapPolicy::Nominal if max_bridge_s.is_some() => {
+            return Err(kerr(
+                "imu.max_bridge_s",
+                "applies only to imu.gap_policy = \"bridge\"",
+            ))
+        }
+        TGapPolicy::Nominal => GapPolicy::Nominal,
+    };
     if m.format != TImuFormat::Csv && m.csv.is_some() {
         return Err(kerr(
             "imu.csv",
@@ -2037,6 +2118,7 @@ fn convert_imu(m: &TImu, base: &Path) -> KResult<ImuSource> {
         rate_hz,
         sensor_to_body_rpy_deg,
         time_offset_s,
+        gap_policy,
     })
 }
 
@@ -2726,6 +2808,14 @@ fn to_raw(c: &RunConfig) -> TomlRoot {
         sensor_to_body_rpy_deg: Some(c.imu.sensor_to_body_rpy_deg.to_vec()),
         time_offset_s: Some(c.imu.time_offset_s),
         tag_file,
+        gap_policy: Some(match c.imu.gap_policy {
+            GapPolicy::Bridge { .. } => TGapPolicy::Bridge,
+            GapPolicy::Nominal => TGapPolicy::Nominal,
+        }),
+        max_bridge_s: match c.imu.gap_policy {
+            GapPolicy::Bridge { max_s } => max_s,
+            GapPolicy::Nominal => None,
+        },
         csv,
     };
     let go = &c.nav.gnss;
@@ -2873,8 +2963,8 @@ fn to_raw(c: &RunConfig) -> TomlRoot {
             initial_s: Some(t.initial_s),
             std_s: (t.std_s > 0.0).then_some(t.std_s),
             random_walk: Some(t.random_walk),
-            initial_rate_ppm: Some(t.initial_rate * 1e6),
-            rate_std_ppm: Some(t.rate_std * 1e6),
+            initial_rate_ppm: Some(tidy(t.initial_rate * 1e6)),
+            rate_std_ppm: Some(tidy(t.rate_std * 1e6)),
         }),
     };
     let v = &c.nav.vehicle;
@@ -3329,6 +3419,8 @@ fn kfgins_to_raw(y: KfYaml, w: &mut Vec<String>) -> KResult<(TomlRoot, Option<St
             sensor_to_body_rpy_deg: None,
             time_offset_s: None,
             tag_file: None,
+            gap_policy: None,
+            max_bridge_s: None,
             csv: None,
         },
         gnss: Some(TGnss {

@@ -3,7 +3,8 @@
 //! (t - t_s)`.
 //!
 //! `#` / `%` comment lines and blank lines are skipped anywhere; the first other line
-//! must be the header `t_s,prn,prc_m,rrc_mps,iode`. Records: t_s [GPS s of week],
+//! must be the header `t_s,prn,prc_m,rrc_mps,iode`. Records: t_s [GPS s of week, in
+//! [0, 604800)],
 //! prn (GPS 1-32), prc_m [m], rrc_mps [m/s], iode (integer 0-65535; empty or left out
 //! means unknown). Times must not decrease, except at a GPS week rollover (a
 //! drop of more than half a week): the following times are moved on by 604800 s, so
@@ -102,12 +103,12 @@ pub fn read_dgps_file(path: &Path) -> Result<DgpsFile, InputError> {
             }
         };
         let t_read = num(0, "t_s")?;
-        if t_read < 0.0 {
+        if !(0.0..SECONDS_PER_WEEK).contains(&t_read) {
             return Err(InputError::at_field(
                 path,
                 ln,
                 "t_s",
-                format!("expected GPS seconds of week >= 0, found {t_read}"),
+                format!("expected GPS seconds of week in [0, 604800), found {t_read}"),
             ));
         }
         if let Some(tp) = prev_t {

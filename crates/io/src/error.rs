@@ -123,6 +123,77 @@ impl InputError {
     pub fn std_not_positive(path: &Path, line: usize, field: &str, value: f64) -> Self {
         InputError::at_field(path, line, field, format!("std must be > 0, found {value}"))
     }
+
+    /// A std, variance, rate or scale `value` (file units) that is `si` in SI units,
+    /// checked with [`check_scale`].
+    pub fn scale(
+        path: &Path,
+        line: usize,
+        field: &str,
+        what: &str,
+        value: f64,
+        si: f64,
+    ) -> Result<f64, Self> {
+        check_scale(what, value, si).map_err(|m| InputError::at_field(path, line, field, m))
+    }
+
+    /// A sample value `value` (file units) that is `si` after unit scaling: finite.
+    pub fn scaled(path: &Path, line: usize, field: &str, value: f64, si: f64) -> Result<f64, Self> {
+        check_finite_si(value, si).map_err(|m| InputError::at_field(path, line, field, m))
+    }
+
+    /// The warning for a damaged last line that was dropped:
+    /// `FILE:LINE: damaged last line dropped (file cut mid-write?): ERROR`.
+    pub fn last_line_warning(&self) -> String {
+        let mut out = self.path.display().to_string();
+        if let Some(line) = self.line {
+            out.push_str(&format!(":{line}"));
+        }
+        out.push_str(": damaged last line dropped (file cut mid-write?): ");
+        if let Some(f) = &self.field {
+            out.push_str(&format!("field '{f}': "));
+        }
+        out.push_str(&self.message);
+        out
+    }
+}
+
+/// Smallest and largest accepted magnitude of a std, variance, rate or scale in SI
+/// units: its square stays a finite normal number.
+pub const SCALE_MIN_SI: f64 = 1e-150;
+pub const SCALE_MAX_SI: f64 = 1e150;
+
+/// Check a std, variance, rate or scale after conversion to SI: `value` is what the
+/// file gave, `si` the converted value. It must be > 0 and finite, and its square
+/// finite and non-zero (so variances neither underflow to 0 nor overflow to inf):
+/// SI value in [1e-150, 1e150]. Returns `si` or the message.
+pub fn check_scale(what: &str, value: f64, si: f64) -> Result<f64, String> {
+    if !(value > 0.0) {
+        return Err(format!("{what} must be > 0, found {value}"));
+    }
+    if !(SCALE_MIN_SI..=SCALE_MAX_SI).contains(&si) {
+        let conv = if si == value {
+            String::new()
+        } else {
+            format!(" ({si:e} in SI units)")
+        };
+        return Err(format!(
+            "{what} {value:e}{conv} is out of range: expected {SCALE_MIN_SI:e} to {SCALE_MAX_SI:e} \
+             in SI units (its square must be a finite non-zero number)"
+        ));
+    }
+    Ok(si)
+}
+
+/// Check a value after unit scaling: `value` finite as read, `si` must be finite too.
+pub fn check_finite_si(value: f64, si: f64) -> Result<f64, String> {
+    if si.is_finite() {
+        Ok(si)
+    } else {
+        Err(format!(
+            "{value} overflows to {si} after conversion to SI units: expected a finite value"
+        ))
+    }
 }
 
 impl fmt::Display for InputError {
@@ -174,6 +245,33 @@ mod tests {
         assert_eq!(e.to_string(), "a.txt:3: field 'lat': boom");
         let e = InputError::new("a.txt", "boom").with_field("id");
         assert_eq!(e.to_string(), "a.txt: field 'id': boom");
+    }
+
+    #[test]
+    fn scale_checks_after_conversion() {
+        assert_eq!(check_scale("std", 2.0, 4.0), Ok(4.0));
+        for (v, si) in [
+            (0.0, 0.0),
+            (-1.0, -1.0),
+            (f64::NAN, f64::NAN),
+            (1e-300, 1e-300),
+        ] {
+            assert!(check_scale("std", v, si).is_err(), "{v}");
+        }
+        let e = check_scale("std", 5e-324, 5e-324 * 0.017).unwrap_err();
+        assert!(
+            e.contains("out of range: expected 1e-150 to 1e150 in SI"),
+            "{e}"
+        );
+        assert!(check_scale("std", 1e300, 1e300).is_err());
+        assert!(check_finite_si(1e308, f64::INFINITY)
+            .unwrap_err()
+            .contains("overflows to inf"));
+        let w = InputError::at_field("a.txt", 9, "lat", "boom").last_line_warning();
+        assert_eq!(
+            w,
+            "a.txt:9: damaged last line dropped (file cut mid-write?): field 'lat': boom"
+        );
     }
 
     #[test]

@@ -8,11 +8,15 @@
 
 use crate::error::InputError;
 use std::fs::File;
-use std::io::{BufRead, BufReader, Write};
+use std::io::{BufRead, BufReader, Read, Write};
 use std::path::{Path, PathBuf};
 
 /// Capacity of the read and write buffers (1 MiB).
 pub const BUF_CAPACITY: usize = 1 << 20;
+
+/// Longest accepted line (1 MiB, without its line end): longer is an error, so a
+/// file without line ends cannot fill the memory.
+pub const MAX_LINE_BYTES: usize = 1 << 20;
 
 /// Reads a text file line by line into a reused buffer.
 pub struct LineReader {
@@ -20,6 +24,8 @@ pub struct LineReader {
     reader: BufReader<File>,
     buf: Vec<u8>,
     line_no: usize,
+    /// The line last returned ended with `\n`.
+    line_end: bool,
 }
 
 impl LineReader {
@@ -36,6 +42,7 @@ impl LineReader {
             reader: BufReader::with_capacity(BUF_CAPACITY, file),
             buf: Vec::with_capacity(256),
             line_no: 0,
+            line_end: true,
         })
     }
 
@@ -51,21 +58,92 @@ impl LineReader {
 
     /// The next line's 1-based number and text without its `\n` / `\r\n`, or None
     /// at the end of the file.
+    /// A line longer than [`MAX_LINE_BYTES`] is an error.
     pub fn next_line(&mut self) -> Result<Option<(usize, &[u8])>, InputError> {
         self.buf.clear();
-        let n = self
-            .reader
+        // Room for the line, `\r\n`, and one byte to detect a longer line.
+        let limit = MAX_LINE_BYTES as u64 + 3;
+        let n = (&mut self.reader)
+            .take(limit)
             .read_until(b'\n', &mut self.buf)
             .map_err(|e| InputError::read(&self.path, &e).with_line(self.line_no + 1))?;
         if n == 0 {
             return Ok(None);
         }
         self.line_no += 1;
+        self.line_end = self.buf.last() == Some(&b'\n');
+        let content = self.buf.len()
+            - match self.buf.as_slice() {
+                [.., b'\r', b'\n'] => 2,
+                [.., b'\n'] => 1,
+                _ => 0,
+            };
+        if content > MAX_LINE_BYTES {
+            return Err(InputError::at_line(
+                &self.path,
+                self.line_no,
+                format!(
+                    "line longer than {MAX_LINE_BYTES} bytes (1 MiB): expected a text file \
+                     with line ends"
+                ),
+            ));
+        }
         let mut end = self.buf.len();
         while end > 0 && matches!(self.buf.get(end - 1), Some(b'\n') | Some(b'\r')) {
             end -= 1;
         }
         Ok(self.buf.get(..end).map(|l| (self.line_no, l)))
+    }
+}
+
+/// Call `f` on every line. An error on a last line without line end (a log cut
+/// mid-write) becomes a warning ([`InputError::last_line_warning`]) pushed to `warnings`, and the
+/// line is dropped; an error on any other line is returned.
+pub fn for_each_line<F>(
+    lines: &mut LineReader,
+    warnings: &mut Vec<String>,
+    mut f: F,
+) -> Result<(), InputError>
+where
+    F: FnMut(usize, &[u8]) -> Result<(), LineError>,
+{
+    while let Some((ln, text)) = lines.next_line()? {
+        match f(ln, text) {
+            Ok(()) => {}
+            Err(LineError::Data(e)) if lines.cut_last_line() => {
+                warnings.push(e.last_line_warning());
+                break;
+            }
+            Err(LineError::Data(e) | LineError::Fatal(e)) => return Err(e),
+        }
+    }
+    Ok(())
+}
+
+/// An error of [`for_each_line`]'s callback: in a data line (dropped with a warning on
+/// the last line) or fatal wherever it is (a header).
+#[derive(Debug)]
+pub enum LineError {
+    Data(InputError),
+    Fatal(InputError),
+}
+
+impl From<InputError> for LineError {
+    fn from(e: InputError) -> Self {
+        LineError::Data(e)
+    }
+}
+
+impl LineReader {
+    /// True when the line last returned is the file's last and has no line end: a
+    /// line cut mid-write.
+    pub fn cut_last_line(&mut self) -> bool {
+        !self.line_end
+            && self
+                .reader
+                .fill_buf()
+                .map(|b| b.is_empty())
+                .unwrap_or(false)
     }
 }
 

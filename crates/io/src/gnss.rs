@@ -6,7 +6,9 @@
 //! (.pos only) and decimated. See docs/FORMATS.md.
 
 use crate::error::InputError;
-use crate::fmt::{field, is_comment_line, parse_f64, split_fields, LineReader};
+use crate::fmt::{
+    field, for_each_line, is_comment_line, parse_f64, split_fields, LineError, LineReader,
+};
 use crate::input::{GnssFormat, GnssSource};
 use crate::time::{calendar_to_week_sow, Calendar, SECONDS_PER_WEEK};
 use nalgebra::Vector3;
@@ -24,6 +26,8 @@ pub struct GnssData {
     pub gps_week: Option<u32>,
     /// Valid epochs left out by the quality filter or by decimation.
     pub skipped: usize,
+    /// Findings that did not stop the read (a damaged last line dropped).
+    pub warnings: Vec<String>,
 }
 
 /// Tolerance of the decimation: an epoch is kept if within 1 ms of a multiple of
@@ -59,12 +63,10 @@ pub fn read_gnss(src: &GnssSource) -> Result<GnssData, InputError> {
             .with_field("decimate_s"))
         }
     };
+    let mut warnings = Vec::new();
     let (epochs, gps_week) = match &src.format {
-        GnssFormat::KfGins => (read_kfgins(path, src.time_offset_s)?, None),
-        GnssFormat::RtklibPos { .. } => {
-            let (e, w) = read_pos(path, src.time_offset_s)?;
-            (e, w)
-        }
+        GnssFormat::KfGins => (read_kfgins(path, src.time_offset_s, &mut warnings)?, None),
+        GnssFormat::RtklibPos { .. } => read_pos(path, src.time_offset_s, &mut warnings)?,
         GnssFormat::Rinex(_) => {
             return Err(InputError::new(
                 path,
@@ -99,6 +101,7 @@ pub fn read_gnss(src: &GnssSource) -> Result<GnssData, InputError> {
         fixes,
         gps_week,
         skipped,
+        warnings,
     })
 }
 
@@ -122,11 +125,7 @@ impl Line<'_> {
 
     fn std(&self, k: usize, name: &str) -> Result<f64, InputError> {
         let v = self.num(k, name)?;
-        if v > 0.0 {
-            Ok(v)
-        } else {
-            Err(InputError::std_not_positive(self.path, self.ln, name, v))
-        }
+        InputError::scale(self.path, self.ln, name, "std", v, v)
     }
 
     fn std3(&self, k: usize, names: [&str; 3]) -> Result<Vector3<f64>, InputError> {
@@ -176,15 +175,19 @@ impl Line<'_> {
     }
 }
 
-fn read_kfgins(path: &Path, offset: f64) -> Result<Vec<Epoch>, InputError> {
+fn read_kfgins(
+    path: &Path,
+    offset: f64,
+    warnings: &mut Vec<String>,
+) -> Result<Vec<Epoch>, InputError> {
     let mut lines = LineReader::open(path)?;
     let mut fields = Vec::with_capacity(16);
     let mut out = Vec::new();
     let mut prev: Option<f64> = None;
-    while let Some((ln, text)) = lines.next_line()? {
+    for_each_line(&mut lines, warnings, |ln, text| {
         split_fields(text, &mut fields);
         if is_comment_line(text, &fields) {
-            continue;
+            return Ok(());
         }
         let l = Line {
             path,
@@ -194,17 +197,16 @@ fn read_kfgins(path: &Path, offset: f64) -> Result<Vec<Epoch>, InputError> {
         };
         let n = fields.len();
         if n != 7 && n != 13 {
-            return Err(InputError::columns(
+            return Err(LineError::Data(InputError::columns(
                 path,
                 ln,
                 "7 or 13",
                 "t, lat lon h, std N E D [, vel N E D, vel std N E D]",
                 n,
-            ));
+            )));
         }
         let t_file = l.num(0, "t")?;
         l.check_time(t_file, prev)?;
-        prev = Some(t_file);
         let lla = l.lla(1, ["lat", "lon", "h"])?;
         let std_ned = l.std3(4, ["std_n", "std_e", "std_d"])?;
         let (vel_ned, vel_std_ned) = if n == 13 {
@@ -214,6 +216,7 @@ fn read_kfgins(path: &Path, offset: f64) -> Result<Vec<Epoch>, InputError> {
         } else {
             (None, None)
         };
+        prev = Some(t_file);
         out.push(Epoch {
             t_file,
             quality: None,
@@ -225,7 +228,8 @@ fn read_kfgins(path: &Path, offset: f64) -> Result<Vec<Epoch>, InputError> {
                 vel_std_ned,
             },
         });
-    }
+        Ok(())
+    })?;
     Ok(out)
 }
 
@@ -332,7 +336,11 @@ fn parse_calendar(l: &Line<'_>) -> Result<(u32, f64), InputError> {
     })
 }
 
-fn read_pos(path: &Path, offset: f64) -> Result<(Vec<Epoch>, Option<u32>), InputError> {
+fn read_pos(
+    path: &Path,
+    offset: f64,
+    warnings: &mut Vec<String>,
+) -> Result<(Vec<Epoch>, Option<u32>), InputError> {
     const WHAT: &str = "date time or week tow, lat lon h, Q ns, sdn sde sdu sdne sdeu sdun, age \
                         ratio [, vn ve vu, sdvn sdve sdvu sdvne sdveu sdvun]";
     let mut lines = LineReader::open(path)?;
@@ -340,13 +348,12 @@ fn read_pos(path: &Path, offset: f64) -> Result<(Vec<Epoch>, Option<u32>), Input
     let mut out = Vec::new();
     let mut prev: Option<f64> = None;
     let mut week0: Option<u32> = None;
-    while let Some((ln, text)) = lines.next_line()? {
+    for_each_line(&mut lines, warnings, |ln, text| {
         split_fields(text, &mut fields);
         match fields.first() {
-            None => continue,
+            None => return Ok(()),
             Some(&(s, _)) if text.get(s) == Some(&b'%') => {
-                check_pos_header(path, ln, text)?;
-                continue;
+                return check_pos_header(path, ln, text).map_err(LineError::Fatal);
             }
             _ => {}
         }
@@ -358,7 +365,9 @@ fn read_pos(path: &Path, offset: f64) -> Result<(Vec<Epoch>, Option<u32>), Input
         };
         let n = fields.len();
         if n != 15 && n != 24 {
-            return Err(InputError::columns(path, ln, "15 or 24", WHAT, n));
+            return Err(LineError::Data(InputError::columns(
+                path, ln, "15 or 24", WHAT, n,
+            )));
         }
         let (week, sow) = if field(text, &fields, 0).contains(&b'/') {
             parse_calendar(&l)?
@@ -366,38 +375,37 @@ fn read_pos(path: &Path, offset: f64) -> Result<(Vec<Epoch>, Option<u32>), Input
             let w = l.num(0, "week")?;
             let tow = l.num(1, "tow")?;
             if w < 0.0 || w.fract() != 0.0 || w > 100_000.0 {
-                return Err(InputError::at_field(
+                return Err(LineError::Data(InputError::at_field(
                     path,
                     ln,
                     "week",
                     format!("expected a GPS week number, found {w}"),
-                ));
+                )));
             }
             if !(0.0..SECONDS_PER_WEEK as f64 + 1.0).contains(&tow) {
-                return Err(InputError::at_field(
+                return Err(LineError::Data(InputError::at_field(
                     path,
                     ln,
                     "tow",
                     format!("expected seconds of week in [0, 604800], found {tow}"),
-                ));
+                )));
             }
             (w as u32, tow)
         };
-        let w0 = *week0.get_or_insert(week);
+        let w0 = week0.unwrap_or(week);
         let t_file = (i64::from(week) - i64::from(w0)) as f64 * SECONDS_PER_WEEK as f64 + sow;
         l.check_time(t_file, prev)?;
-        prev = Some(t_file);
         let lla = l.lla(2, ["lat", "lon", "height"])?;
         let q = l.num(5, "Q")?;
         if !(0.0..=255.0).contains(&q) || q.fract() != 0.0 {
-            return Err(InputError::at_field(
+            return Err(LineError::Data(InputError::at_field(
                 path,
                 ln,
                 "Q",
                 format!(
                     "expected an integer quality flag (1 fix, 2 float, 5 single ...), found {q}"
                 ),
-            ));
+            )));
         }
         l.num(6, "ns")?;
         let sd = l.std3(7, ["sdn", "sde", "sdu"])?;
@@ -420,6 +428,8 @@ fn read_pos(path: &Path, offset: f64) -> Result<(Vec<Epoch>, Option<u32>), Input
         } else {
             (None, None)
         };
+        week0 = Some(w0);
+        prev = Some(t_file);
         out.push(Epoch {
             t_file,
             quality: Some(q as u8),
@@ -431,7 +441,8 @@ fn read_pos(path: &Path, offset: f64) -> Result<(Vec<Epoch>, Option<u32>), Input
                 vel_std_ned,
             },
         });
-    }
+        Ok(())
+    })?;
     Ok((out, week0))
 }
 

@@ -6,7 +6,8 @@
 //! Whitespace- or comma-separated, `#` / `%` comment lines and blank lines allowed.
 //! Times are on the GNSS time scale (GPS seconds of week, like the GNSS files) and
 //! must increase strictly. Headings are accepted in [0, 360) or (-180, 180] deg
-//! (that is, -180 < heading < 360), stds must be > 0. The first bad record stops the
+//! (that is, -180 < heading < 360), stds must be > 0 with a finite, non-zero
+//! square in radians (1e-150 to 1e150 rad). The first bad record stops the
 //! read with an [`InputError`] naming file, line and field. A file without records
 //! gives an empty list.
 
@@ -63,13 +64,11 @@ pub fn read_heading(path: &Path) -> Result<Vec<HeadingObs>, InputError> {
             ));
         }
         let std = num(2, "std")?;
-        if std <= 0.0 {
-            return Err(InputError::std_not_positive(path, ln, "std", std));
-        }
+        let std_rad = InputError::scale(path, ln, "std", "std", std, std.to_radians())?;
         out.push(HeadingObs {
             t,
             heading_rad: heading.to_radians(),
-            std_rad: std.to_radians(),
+            std_rad,
         });
     }
     Ok(out)

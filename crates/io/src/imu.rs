@@ -9,12 +9,20 @@
 //! - `time_offset_s` is added to every tag;
 //! - a sample with the same tag as the previous one is dropped and counted
 //!   ([`ImuReport::duplicates`]); a tag smaller than the previous one is an error;
-//! - dt = t_k - t_{k-1}, except for the first sample and after a gap > 0.1 s, where
-//!   dt = 1 / rate_hz (the KF-GINS rule); intervals longer than 1.5 / rate_hz are
-//!   listed in [`ImuReport::gaps`];
+//! - dt = t_k - t_{k-1}; the first sample gets dt = 1 / rate_hz; after a gap > 0.1 s
+//!   it depends on [`GapPolicy`]: `Bridge` (default) keeps the real interval and holds
+//!   the sample over it (rates: w_k * dt; increments, taken to cover one nominal
+//!   interval: scaled by interval * rate_hz), a gap above `max_s` is an error;
+//!   `Nominal` uses dt = 1 / rate_hz and the increment as read (the KF-GINS rule);
+//!   intervals longer than 1.5 / rate_hz are listed in [`ImuReport::gaps`], bridged
+//!   gaps also in a warning;
 //! - rates become increments: instantaneous rates by the trapezoid
 //!   (w_{k-1} + w_k) / 2 * dt over the interval ending at t_k (the first sample only
 //!   seeds w_{k-1}; after a gap > 0.1 s, w_k * dt), interval-mean rates as w_k * dt;
+//! - every value must stay finite after unit scaling;
+//! - a damaged last line without line end (a log cut mid-write) is dropped with a
+//!   warning
+//!   ([`ImuReport::warnings`]); damage elsewhere is an error;
 //! - increments are rotated to the body frame: v_body = Rz(yaw) Ry(pitch) Rx(roll)
 //!   v_sensor with `sensor_to_body_rpy_deg`.
 
@@ -23,8 +31,8 @@ use crate::fmt::{
     field, is_comment_line, parse_f64, parse_first_n, parse_i64, split_fields, LineReader,
 };
 use crate::input::{
-    AccelUnit, CsvImuOptions, GyroUnit, ImuFormat, ImuQuantity, ImuSource, RateSampling, TimeScale,
-    TimeUnit,
+    AccelUnit, CsvImuOptions, GapPolicy, GyroUnit, ImuFormat, ImuQuantity, ImuSource, RateSampling,
+    TimeScale, TimeUnit,
 };
 use crate::time::{gpst_unix_to_week_sow, GPS_EPOCH_UNIX, SECONDS_PER_WEEK};
 use crate::timetag::read_timetag;
@@ -66,6 +74,10 @@ pub struct ImuReport {
     pub first_t: Option<f64>,
     /// Time tag of the last sample read [s].
     pub last_t: Option<f64>,
+    /// What was done with intervals longer than [`MAX_DT_S`].
+    pub gap_policy: GapPolicy,
+    /// Findings that did not stop the read: a damaged last line dropped, gaps bridged.
+    pub warnings: Vec<String>,
 }
 
 impl fmt::Display for ImuReport {
@@ -136,10 +148,49 @@ impl fmt::Display for ImuReport {
                 longest.0
             )?;
             if over > 0 {
-                write!(f, "; {over} longer than {MAX_DT_S} s use dt = 1/rate")?;
+                match self.gap_policy {
+                    GapPolicy::Nominal => {
+                        write!(f, "; {over} longer than {MAX_DT_S} s use dt = 1/rate")?
+                    }
+                    GapPolicy::Bridge { .. } => write!(
+                        f,
+                        "; {over} longer than {MAX_DT_S} s bridged with dt = the real interval"
+                    )?,
+                }
             }
         }
-        f.write_str(".")
+        f.write_str(".")?;
+        for w in &self.warnings {
+            write!(f, "\nwarning: {w}")?;
+        }
+        Ok(())
+    }
+}
+
+/// How many bridged gaps a warning lists.
+const MAX_LISTED_GAPS: usize = 5;
+
+impl ImuReport {
+    /// The warning listing the gaps bridged (longer than [`MAX_DT_S`]), if any.
+    fn bridged_gaps_warning(&self) -> Option<String> {
+        let long: Vec<&(f64, f64)> = self.gaps.iter().filter(|g| g.1 - g.0 > MAX_DT_S).collect();
+        if long.is_empty() || self.gap_policy == GapPolicy::Nominal {
+            return None;
+        }
+        let mut w = format!(
+            "{}: {} gaps longer than {MAX_DT_S} s bridged by dead reckoning over their real \
+             length (imu.gap_policy = \"bridge\"):",
+            self.path.display(),
+            long.len()
+        );
+        for (k, g) in long.iter().take(MAX_LISTED_GAPS).enumerate() {
+            let sep = if k == 0 { " " } else { ", " };
+            w.push_str(&format!("{sep}{:.3} s from t = {:.3}", g.1 - g.0, g.0));
+        }
+        if long.len() > MAX_LISTED_GAPS {
+            w.push_str(", ...");
+        }
+        Some(w)
     }
 }
 
@@ -193,6 +244,7 @@ pub struct ImuReader {
     gps_week: Option<u32>,
     prev_t: Option<f64>,
     prev_rate: Option<(Vector3<f64>, Vector3<f64>)>,
+    gap_policy: GapPolicy,
     fields: Vec<(usize, usize)>,
     report: ImuReport,
     done: bool,
@@ -202,13 +254,6 @@ pub struct ImuReader {
 /// reads the tag file and pre-scans the counters.
 pub fn open_imu(src: &ImuSource) -> Result<ImuReader, InputError> {
     let path = src.path.as_path();
-    if !(src.rate_hz.is_finite() && src.rate_hz > 0.0) {
-        return Err(InputError::new(
-            path,
-            format!("rate_hz must be a finite number > 0, found {}", src.rate_hz),
-        )
-        .with_field("rate_hz"));
-    }
     if !src.time_offset_s.is_finite() {
         return Err(InputError::new(
             path,
@@ -232,8 +277,14 @@ pub fn open_imu(src: &ImuSource) -> Result<ImuReader, InputError> {
     } else {
         Some(c_bn_from_euler(&rpy))
     };
+    let rate_hz = crate::error::check_scale("rate_hz", src.rate_hz, src.rate_hz)
+        .map_err(|m| InputError::new(path, m).with_field("rate_hz"))?;
+    if let GapPolicy::Bridge { max_s: Some(m) } = src.gap_policy {
+        crate::error::check_scale("max_bridge_s", m, m)
+            .map_err(|m| InputError::new(path, m).with_field("max_bridge_s"))?;
+    }
     let lines = LineReader::open(path)?;
-    let nominal_dt = 1.0 / src.rate_hz;
+    let nominal_dt = 1.0 / rate_hz;
     let mut gps_week = None;
     let (kind, quantity, sampling) = match &src.format {
         ImuFormat::KfGins => (Kind::KfGins, ImuQuantity::Increment, RateSampling::Instant),
@@ -284,10 +335,12 @@ pub fn open_imu(src: &ImuSource) -> Result<ImuReader, InputError> {
         gps_week,
         prev_t: None,
         prev_rate: None,
+        gap_policy: src.gap_policy,
         fields: Vec::with_capacity(16),
         report: ImuReport {
             path: path.to_path_buf(),
             nominal_dt,
+            gap_policy: src.gap_policy,
             ..ImuReport::default()
         },
         done: false,
@@ -306,34 +359,56 @@ impl ImuReader {
         &self.report
     }
 
-    /// Read lines until one gives a sample, the file ends or an error occurs.
+    /// Read lines until one gives a sample, the file ends or an error occurs. An error
+    /// on the last line drops it with a warning.
     fn read_sample(&mut self) -> Result<Option<ImuSample>, InputError> {
         loop {
             let Some((ln, line)) = self.lines.next_line()? else {
+                self.finish();
                 return Ok(None);
             };
             self.report.lines += 1;
             let raw = match &self.kind {
-                Kind::KfGins => parse_kfgins(&self.path, ln, line, &mut self.fields, self.offset)?,
-                Kind::Csv(k) => parse_csv(&self.path, ln, line, &mut self.fields, k, self.offset)?,
+                Kind::KfGins => parse_kfgins(&self.path, ln, line, &mut self.fields, self.offset),
+                Kind::Csv(k) => parse_csv(&self.path, ln, line, &mut self.fields, k, self.offset),
                 Kind::Rtk(k) => {
-                    match parse_rtk(&self.path, ln, line, &mut self.fields, k, self.offset)? {
-                        RtkLine::Sample(r) => Some(r),
-                        RtkLine::Truncated => {
+                    match parse_rtk(&self.path, ln, line, &mut self.fields, k, self.offset) {
+                        Ok(RtkLine::Sample(r)) => Ok(Some(r)),
+                        Ok(RtkLine::Truncated) => {
                             self.report.truncated_lines += 1;
                             continue;
                         }
-                        RtkLine::Blank => None,
+                        Ok(RtkLine::Blank) => Ok(None),
+                        Err(e) => Err(e),
                     }
                 }
             };
-            let Some((t, g, a)) = raw else {
-                self.report.skipped_lines += 1;
-                continue;
+            let r = match raw {
+                Ok(Some((t, g, a))) => self.process(ln, t, g, a),
+                Ok(None) => {
+                    self.report.skipped_lines += 1;
+                    continue;
+                }
+                Err(e) => Err(e),
             };
-            if let Some(s) = self.process(ln, t, g, a)? {
-                return Ok(Some(s));
+            match r {
+                Ok(Some(s)) => return Ok(Some(s)),
+                Ok(None) => {}
+                Err(e) if e.line == Some(ln) && self.lines.cut_last_line() => {
+                    self.report.truncated_lines += 1;
+                    self.report.warnings.push(e.last_line_warning());
+                    self.finish();
+                    return Ok(None);
+                }
+                Err(e) => return Err(e),
             }
+        }
+    }
+
+    /// End of the file: the gap warning.
+    fn finish(&mut self) {
+        if let Some(w) = self.report.bridged_gaps_warning() {
+            self.report.warnings.push(w);
         }
     }
 
@@ -345,6 +420,16 @@ impl ImuReader {
         g: Vector3<f64>,
         a: Vector3<f64>,
     ) -> Result<Option<ImuSample>, InputError> {
+        if !t.is_finite() {
+            return Err(InputError::at_field(
+                &self.path,
+                ln,
+                "time",
+                format!("time tag {t} s after the offset: expected a finite time"),
+            ));
+        }
+        // Increments scale with the interval they are held over (bridged gaps).
+        let mut hold = 1.0;
         let (dt, after_gap) = match self.prev_t {
             Some(pt) => {
                 if t == pt {
@@ -362,7 +447,35 @@ impl ImuReader {
                     self.report.gaps.push((pt, t));
                 }
                 if interval > MAX_DT_S {
-                    (self.nominal_dt, true)
+                    match self.gap_policy {
+                        GapPolicy::Nominal => (self.nominal_dt, true),
+                        GapPolicy::Bridge { max_s } => {
+                            if let Some(m) =
+                                max_s.filter(|m| interval > *m || !interval.is_finite())
+                            {
+                                return Err(InputError::at_field(
+                                    &self.path,
+                                    ln,
+                                    "time",
+                                    format!(
+                                        "gap of {interval} s from t = {pt} to {t} is longer \
+                                         than imu.max_bridge_s = {m} s: split the run at the \
+                                         gap, or raise imu.max_bridge_s"
+                                    ),
+                                ));
+                            }
+                            if !(interval * interval).is_finite() {
+                                return Err(InputError::at_field(
+                                    &self.path,
+                                    ln,
+                                    "time",
+                                    format!("gap of {interval} s from t = {pt} to {t} is too long to bridge"),
+                                ));
+                            }
+                            hold = interval / self.nominal_dt;
+                            (interval, true)
+                        }
+                    }
                 } else {
                     (interval, false)
                 }
@@ -376,7 +489,7 @@ impl ImuReader {
         self.prev_t = Some(t);
         self.report.last_t = Some(t);
         let (mut dtheta, mut dvel) = match (self.quantity, self.sampling) {
-            (ImuQuantity::Increment, _) => (g, a),
+            (ImuQuantity::Increment, _) => (g * hold, a * hold),
             (ImuQuantity::Rate, RateSampling::IntervalMean) => (g * dt, a * dt),
             (ImuQuantity::Rate, RateSampling::Instant) => {
                 let prev = self.prev_rate.replace((g, a));
@@ -390,6 +503,13 @@ impl ImuReader {
         if let Some(r) = &self.rot {
             dtheta = r * dtheta;
             dvel = r * dvel;
+        }
+        if let Some(v) = dtheta.iter().chain(dvel.iter()).find(|v| !v.is_finite()) {
+            return Err(InputError::at_line(
+                &self.path,
+                ln,
+                format!("the increment over dt = {dt} s is {v}: expected finite values"),
+            ));
         }
         self.report.samples += 1;
         Ok(Some(ImuSample {
@@ -449,11 +569,11 @@ fn vec3(
     names: [&str; 3],
     factor: f64,
 ) -> Result<Vector3<f64>, InputError> {
-    Ok(Vector3::new(
-        num(path, ln, line, fields, cols[0], names[0])? * factor,
-        num(path, ln, line, fields, cols[1], names[1])? * factor,
-        num(path, ln, line, fields, cols[2], names[2])? * factor,
-    ))
+    let one = |k: usize| -> Result<f64, InputError> {
+        let v = num(path, ln, line, fields, cols[k], names[k])?;
+        InputError::scaled(path, ln, names[k], v, v * factor)
+    };
+    Ok(Vector3::new(one(0)?, one(1)?, one(2)?))
 }
 
 fn parse_kfgins(
@@ -800,6 +920,7 @@ mod tests {
             rate_hz: rate,
             sensor_to_body_rpy_deg: [0.0; 3],
             time_offset_s: 0.0,
+            gap_policy: GapPolicy::Nominal,
         }
     }
 

@@ -90,6 +90,24 @@ pub enum ImuFormat {
     RtklibExplorer(RtklibExplorerImuOptions),
 }
 
+/// What the IMU reader does with an interval longer than 0.1 s (a gap in the data).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum GapPolicy {
+    /// dt = the real interval, so the filter's covariance grows over the gap. The
+    /// sample after the gap is held over it: rates give rate * dt; increments (which
+    /// cover one nominal interval) are scaled by interval * rate_hz. A gap longer
+    /// than `max_s` is an error.
+    Bridge { max_s: Option<f64> },
+    /// dt = 1 / rate_hz and the increment as read (KF-GINS): the gap's time is lost.
+    Nominal,
+}
+
+impl Default for GapPolicy {
+    fn default() -> Self {
+        GapPolicy::Bridge { max_s: None }
+    }
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct ImuSource {
     pub path: PathBuf,
@@ -101,6 +119,8 @@ pub struct ImuSource {
     pub sensor_to_body_rpy_deg: [f64; 3],
     /// Seconds added to every IMU time tag (latency correction).
     pub time_offset_s: f64,
+    /// Intervals longer than 0.1 s.
+    pub gap_policy: GapPolicy,
 }
 
 #[derive(Clone, Debug, PartialEq)]

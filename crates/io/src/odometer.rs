@@ -36,14 +36,10 @@ pub fn read_odometer(src: &OdometerSource) -> Result<Vec<OdometerSample>, InputE
         OdometerFormat::Speed { .. } => None,
         OdometerFormat::Pulses { meters_per_pulse }
         | OdometerFormat::Navfuse { meters_per_pulse } => {
-            if !(meters_per_pulse.is_finite() && meters_per_pulse > 0.0) {
-                return Err(InputError::new(
-                    path,
-                    format!("meters_per_pulse must be a number > 0, found {meters_per_pulse}"),
-                )
-                .with_field("meters_per_pulse"));
-            }
-            Some(meters_per_pulse)
+            let k =
+                crate::error::check_scale("meters_per_pulse", meters_per_pulse, meters_per_pulse)
+                    .map_err(|m| InputError::new(path, m).with_field("meters_per_pulse"))?;
+            Some(k)
         }
     };
 
@@ -80,6 +76,14 @@ pub fn read_odometer(src: &OdometerSource) -> Result<Vec<OdometerSample>, InputE
             }
             if t < tp {
                 return Err(InputError::backwards(path, ln, t, tp));
+            }
+            if !(t - tp).is_finite() {
+                return Err(InputError::at_field(
+                    path,
+                    ln,
+                    "time",
+                    format!("time {t} is too far from the previous record ({tp})"),
+                ));
             }
         }
         match src.format {
@@ -129,9 +133,22 @@ pub fn read_odometer(src: &OdometerSource) -> Result<Vec<OdometerSample>, InputE
                     }
                     let dt = t - tp;
                     let k = meters_per_pulse.unwrap_or(0.0);
+                    let speed = k * (pulses - np) / dt;
+                    if !speed.is_finite() {
+                        return Err(InputError::at_field(
+                            path,
+                            ln,
+                            "pulses",
+                            format!(
+                                "{} pulses in {dt} s give a speed of {speed} m/s: expected a \
+                                 finite speed",
+                                pulses - np
+                            ),
+                        ));
+                    }
                     out.push(OdometerSample {
                         t,
-                        speed_mps: k * (pulses - np) / dt,
+                        speed_mps: speed,
                         interval_s: dt,
                     });
                 }

@@ -28,6 +28,8 @@ pub struct RinexNav {
     pub leap_seconds: Option<i32>,
     /// Records of other systems that were skipped.
     pub skipped_records: usize,
+    /// Findings that did not stop the read: a damaged last record dropped.
+    pub warnings: Vec<String>,
 }
 
 /// Header label columns (RINEX 3.04 §5.1: label in columns 61-80).
@@ -67,6 +69,28 @@ const ORBIT_FIELDS: [&str; 28] = [
     "spare",
     "spare",
 ];
+
+/// Physical bounds of the orbit fields (index into [`ORBIT_FIELDS`], largest |value|,
+/// unit), far above real GPS values: angles within a turn or two, rates below
+/// 1e-6 rad/s (real: ~1e-8), harmonic terms below 1e-2 rad / 1e4 m (real: ~1e-5 /
+/// ~400), TGD below 1e-3 s. Beyond them the orbit is meaningless (or NaN).
+const ORBIT_LIMITS: [(usize, f64, &str); 14] = [
+    (1, 1e4, "m"),
+    (2, 1e-6, "rad/s"),
+    (3, 2.0 * TWO_PI, "rad"),
+    (4, 1e-2, "rad"),
+    (6, 1e-2, "rad"),
+    (9, 1e-2, "rad"),
+    (10, 2.0 * TWO_PI, "rad"),
+    (11, 1e-2, "rad"),
+    (12, TWO_PI, "rad"),
+    (13, 1e4, "m"),
+    (14, 2.0 * TWO_PI, "rad"),
+    (15, 1e-6, "rad/s"),
+    (16, 1e-6, "rad/s"),
+    (22, 1e-3, "s"),
+];
+const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
 
 /// The text of columns [a, b) of a line (clamped to its length).
 pub(crate) fn cols(line: &[u8], a: usize, b: usize) -> &[u8] {
@@ -279,7 +303,21 @@ pub fn read_rinex_nav(path: &Path) -> Result<RinexNav, InputError> {
             _ => {}
         }
     }
-    // Records.
+    // Records. A last record cut by the end of the file is dropped with a warning.
+    match read_records(&mut rd, path, v3, &mut nav) {
+        Ok(()) => {}
+        Err(e) if rd.cut_last_line() => nav.warnings.push(e.last_line_warning()),
+        Err(e) => return Err(e),
+    }
+    Ok(nav)
+}
+
+fn read_records(
+    rd: &mut LineReader,
+    path: &Path,
+    v3: bool,
+    nav: &mut RinexNav,
+) -> Result<(), InputError> {
     while let Some((ln, l)) = rd.next_line()? {
         let line = l.to_vec();
         if trim(&line).is_empty() {
@@ -320,10 +358,10 @@ pub fn read_rinex_nav(path: &Path) -> Result<RinexNav, InputError> {
                 continue;
             }
         }
-        let eph = read_gps_record(&mut rd, path, ln, &line, v3)?;
+        let eph = read_gps_record(rd, path, ln, &line, v3)?;
         nav.gps.push(eph);
     }
-    Ok(nav)
+    Ok(())
 }
 
 /// Parse one GPS record whose first line (number `ln`) has been read.
@@ -438,6 +476,27 @@ fn read_gps_record(
             "Toe",
             format!("expected 0 <= toe < 604800 s, found {}", f[8]),
         ));
+    }
+    for (idx, lim, unit) in ORBIT_LIMITS {
+        let v = f[idx];
+        if v.abs() > lim {
+            return Err(InputError::at_field(
+                path,
+                line_of(idx),
+                ORBIT_FIELDS[idx],
+                format!("expected |value| <= {lim} {unit} (a broadcast orbit), found {v}"),
+            ));
+        }
+    }
+    for (name, v, lim) in [("af0", af0, 1.0), ("af1", af1, 1e-3), ("af2", af2, 1e-3)] {
+        if v.abs() > lim {
+            return Err(InputError::at_field(
+                path,
+                ln,
+                name,
+                format!("expected |value| <= {lim} (a satellite clock), found {v}"),
+            ));
+        }
     }
     let mut week = whole_in(path, line_of(18), "GPS Week", f[18], 0.0, 1e5)? as i32;
     // A week given modulo 1024 is moved next to toc's week.

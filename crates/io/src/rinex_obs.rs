@@ -352,15 +352,57 @@ fn unsupported(path: &Path, ln: usize, version: f64, supported: &str) -> InputEr
 /// Read the GPS L1 C/A observations of a RINEX 2.10/2.11 or 3.0x observation file;
 /// the version is taken from the `RINEX VERSION / TYPE` line. See the module
 /// documentation for what is kept and skipped.
+/// Warnings (a damaged last epoch dropped) are left out: see [`read_rinex_obs_report`].
 pub fn read_rinex_obs(path: &Path) -> Result<Vec<ObsEpoch>, InputError> {
+    read_rinex_obs_report(path).map(|r| r.epochs)
+}
+
+/// What an observation file gave.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RinexObsRead {
+    pub epochs: Vec<ObsEpoch>,
+    /// Findings that did not stop the read: a damaged last epoch dropped.
+    pub warnings: Vec<String>,
+}
+
+/// [`read_rinex_obs`] with its warnings. A last epoch cut by the end of the file (a
+/// log cut mid-write) is dropped with a warning; damage elsewhere is an error.
+pub fn read_rinex_obs_report(path: &Path) -> Result<RinexObsRead, InputError> {
     let (mut rd, ln, version) = open_obs(path)?;
-    if version.floor() == 2.0 {
-        read_v2_body(&mut rd, path)
+    let body = if version.floor() == 2.0 {
+        read_v2_body
     } else if version.floor() == 3.0 {
-        read_v3_body(&mut rd, path)
+        read_v3_body
     } else {
-        Err(unsupported(path, ln, version, "2.10, 2.11 and 3.0x are"))
+        return Err(unsupported(path, ln, version, "2.10, 2.11 and 3.0x are"));
+    };
+    let mut out = RinexObsRead {
+        epochs: Vec::new(),
+        warnings: Vec::new(),
+    };
+    let mut records = false;
+    match body(&mut rd, path, &mut out.epochs, &mut records) {
+        Ok(()) => {}
+        Err(e) if records && rd.cut_last_line() => out.warnings.push(e.last_line_warning()),
+        Err(e) => return Err(e),
     }
+    for (k, w) in out.epochs.windows(2).enumerate() {
+        if w[1].t.diff_s(&w[0].t) < 0.0 {
+            return Err(InputError::new(
+                path,
+                format!(
+                    "epoch {} (week {} {} s) goes backwards (previous {} s): expected \
+                     non-decreasing epoch times",
+                    k + 2,
+                    w[1].t.week,
+                    w[1].t.sow,
+                    w[0].t.sow
+                ),
+            )
+            .with_field("epoch time"));
+        }
+    }
+    Ok(out)
 }
 
 /// Read the GPS C1C/L1C/D1C/S1C observations of a RINEX 3.0x observation file. Other
@@ -375,11 +417,18 @@ pub fn read_rinex3_obs(path: &Path) -> Result<Vec<ObsEpoch>, InputError> {
             "3.0x is; read_rinex_obs also reads 2.10/2.11",
         ));
     }
-    read_v3_body(&mut rd, path)
+    let mut out = Vec::new();
+    read_v3_body(&mut rd, path, &mut out, &mut false)?;
+    Ok(out)
 }
 
 /// The records after `RINEX VERSION / TYPE` of a RINEX 3.0x file.
-fn read_v3_body(rd: &mut LineReader, path: &Path) -> Result<Vec<ObsEpoch>, InputError> {
+fn read_v3_body(
+    rd: &mut LineReader,
+    path: &Path,
+    out: &mut Vec<ObsEpoch>,
+    records: &mut bool,
+) -> Result<(), InputError> {
     // GPS observation types in header order (continuation lines have a blank system).
     let mut gps_types: Vec<String> = Vec::new();
     let mut current_sys = b' ';
@@ -432,7 +481,7 @@ fn read_v3_body(rd: &mut LineReader, path: &Path) -> Result<Vec<ObsEpoch>, Input
     let idx = |name: &str| gps_types.iter().position(|t| t == name);
     let (i_c, i_l, i_d, i_s) = (idx("C1C"), idx("L1C"), idx("D1C"), idx("S1C"));
 
-    let mut out = Vec::new();
+    *records = true;
     while let Some((ln, l)) = rd.next_line()? {
         let line = l.to_vec();
         if text(&line).is_empty() {
@@ -523,7 +572,7 @@ fn read_v3_body(rd: &mut LineReader, path: &Path) -> Result<Vec<ObsEpoch>, Input
             sats,
         });
     }
-    Ok(out)
+    Ok(())
 }
 
 /// Header label of the RINEX 2 observation type list.
@@ -753,7 +802,12 @@ fn skip_lines(
 }
 
 /// The records after `RINEX VERSION / TYPE` of a RINEX 2.10/2.11 file.
-fn read_v2_body(rd: &mut LineReader, path: &Path) -> Result<Vec<ObsEpoch>, InputError> {
+fn read_v2_body(
+    rd: &mut LineReader,
+    path: &Path,
+    out: &mut Vec<ObsEpoch>,
+    records: &mut bool,
+) -> Result<(), InputError> {
     let mut types = V2Types::default();
     loop {
         let (ln, line) = rd
@@ -777,7 +831,7 @@ fn read_v2_body(rd: &mut LineReader, path: &Path) -> Result<Vec<ObsEpoch>, Input
     }
     let mut layout = V2Layout::new(&types);
 
-    let mut out = Vec::new();
+    *records = true;
     while let Some((ln, l)) = rd.next_line()? {
         let line = l.to_vec();
         if text(&line).is_empty() {
@@ -916,7 +970,7 @@ fn read_v2_body(rd: &mut LineReader, path: &Path) -> Result<Vec<ObsEpoch>, Input
             sats,
         });
     }
-    Ok(out)
+    Ok(())
 }
 
 #[cfg(test)]

@@ -97,7 +97,7 @@ fn errors_name_file_line_and_field() {
     );
     assert_eq!(
         err("-1,5,1.0,0.0,1\n"),
-        ":3: field 't_s': expected GPS seconds of week >= 0, found -1"
+        ":3: field 't_s': expected GPS seconds of week in [0, 604800), found -1"
     );
     assert_eq!(
         err("410400,5,1.0\n"),

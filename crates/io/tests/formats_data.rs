@@ -38,6 +38,7 @@ fn kfgins_imu(path: PathBuf) -> ImuSource {
         rate_hz: 200.0,
         sensor_to_body_rpy_deg: [0.0; 3],
         time_offset_s: 0.0,
+        gap_policy: Default::default(),
     }
 }
 
@@ -170,6 +171,7 @@ fn rtk_source(dir: &str, csv: &str) -> Option<ImuSource> {
         rate_hz: 100.0,
         sensor_to_body_rpy_deg: [180.0, 0.0, 180.0],
         time_offset_s: 0.0,
+        gap_policy: Default::default(),
     })
 }
 

@@ -32,6 +32,7 @@ fn imu(path: PathBuf, format: ImuFormat) -> ImuSource {
         rate_hz: 200.0,
         sensor_to_body_rpy_deg: [0.0; 3],
         time_offset_s: 0.0,
+        gap_policy: Default::default(),
     }
 }
 
@@ -438,7 +439,7 @@ fn out_of_range_values() {
         &p,
         None,
         Some("rate_hz"),
-        "rate_hz must be a finite number > 0, found 0",
+        "rate_hz must be > 0, found 0",
     );
 }
 

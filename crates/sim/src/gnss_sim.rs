@@ -493,9 +493,17 @@ impl GnssSpec {
                     end_s,
                     mode,
                     delay_s,
-                    ..
+                    offset_m,
+                    velocity_mps,
                 } => {
                     window(*start_s, *end_s)?;
+                    let vals = offset_m.iter().chain(velocity_mps).chain([delay_s]);
+                    if let Some(v) = vals.into_iter().find(|v| !v.is_finite()) {
+                        return Err((
+                            key,
+                            format!("offset_m, velocity_mps and delay_s must be finite, got {v}"),
+                        ));
+                    }
                     if *mode == SpoofMode::Replay && !(*delay_s > 0.0 && *delay_s <= *start_s) {
                         return Err((
                             key,

@@ -284,6 +284,11 @@ fn segment_line(text: &str, k: usize) -> Option<usize> {
         .map(|(i, _)| i + 1)
 }
 
+/// Longest scenario: 30 days [s].
+pub const MAX_DURATION_S: f64 = 30.0 * 86_400.0;
+/// Most IMU samples a scenario may generate: 30 days at 100 Hz.
+pub const MAX_IMU_SAMPLES: f64 = MAX_DURATION_S * 100.0;
+
 impl Scenario {
     /// Read and validate a scenario file.
     pub fn load(path: &Path) -> Result<Scenario, InputError> {
@@ -339,6 +344,19 @@ impl Scenario {
             field: Some(format!("segment[{}]", e.index + 1)),
             message: e.message.clone(),
         })?;
+        let dur = trajectory.duration();
+        if !(dur.is_finite() && dur <= MAX_DURATION_S) {
+            return Err(key_err(
+                path,
+                &text,
+                "segments",
+                Some("[[segment]]"),
+                format!(
+                    "the segments last {dur} s in total: expected at most 30 days \
+                     ({MAX_DURATION_S} s); split the scenario"
+                ),
+            ));
+        }
         let v = &file.vehicle;
         if !v
             .imu_mounting_deg
@@ -369,6 +387,21 @@ impl Scenario {
                 "imu.rate_hz",
                 Some("rate_hz"),
                 format!("expected a rate in (0, 10000] Hz, got {}", imu.rate_hz),
+            ));
+        }
+        let samples = imu.rate_hz * dur;
+        if samples > MAX_IMU_SAMPLES {
+            return Err(key_err(
+                path,
+                &text,
+                "imu.rate_hz",
+                Some("rate_hz"),
+                format!(
+                    "{} Hz for {dur} s gives {samples:.3e} IMU samples: expected at most \
+                     {MAX_IMU_SAMPLES:.1e} (30 days at 100 Hz, tens of GB of text); lower \
+                     the rate or shorten the scenario",
+                    imu.rate_hz
+                ),
             ));
         }
         let truth_every = match file.output.truth_rate_hz {

@@ -1,0 +1,538 @@
+//! Fuzz suite: every reader and both config formats on mutated real seed files
+//! (tests/data/fuzz, tests/data, examples). Each case runs under `catch_unwind` in a
+//! worker thread watched for hangs; every accepted output is checked (numbers
+//! finite, stds in range, times increasing; configs round-trip through
+//! `to_toml_string`). Normal `cargo test`: a few thousand cases per reader.
+//!
+//! Long mode: `NAVFUSE_FUZZ_CASES=1000000 cargo test --release -p navfuse-io --test
+//! fuzz -- --nocapture` (cases per reader); `NAVFUSE_FUZZ_SEED` sets the base seed,
+//! `NAVFUSE_FUZZ_ONLY=name` runs one target. A failure prints its target and seed.
+
+mod fuzz_support;
+
+use fuzz_support::{mutate, Rng};
+use navfuse_gnss::GpsTime;
+use navfuse_io::config::{load, parse_toml_str, RunConfig};
+use navfuse_io::input::*;
+use std::path::{Path, PathBuf};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+const DEFAULT_CASES: u64 = 1500;
+const DEFAULT_SEED: u64 = 0x6E61_7666_7573_6531;
+/// A case taking longer than this is a hang.
+const HANG: Duration = Duration::from_secs(10);
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn seed(rel: &str) -> Vec<u8> {
+    std::fs::read(root().join(rel)).unwrap_or_else(|e| panic!("seed {rel}: {e}"))
+}
+
+type Check = fn(&Path) -> Result<(), String>;
+
+struct Target {
+    name: &'static str,
+    ext: &'static str,
+    seeds: Vec<Vec<u8>>,
+    check: Check,
+}
+
+fn finite(what: &str, v: f64) -> Result<(), String> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(format!("accepted a non-finite {what}: {v}"))
+    }
+}
+
+/// A usable std: its square finite and non-zero.
+fn std_ok(what: &str, v: f64) -> Result<(), String> {
+    let sq = v * v;
+    if v > 0.0 && sq.is_finite() && sq > 0.0 {
+        Ok(())
+    } else {
+        Err(format!("accepted an unusable {what}: {v}"))
+    }
+}
+
+fn increasing(what: &str, prev: &mut Option<f64>, t: f64) -> Result<(), String> {
+    finite(what, t)?;
+    if let Some(p) = *prev {
+        if t <= p {
+            return Err(format!("{what} not increasing: {t} after {p}"));
+        }
+    }
+    *prev = Some(t);
+    Ok(())
+}
+
+fn imu_src(path: &Path, format: ImuFormat, rate_hz: f64) -> ImuSource {
+    ImuSource {
+        path: path.to_path_buf(),
+        format,
+        rate_hz,
+        sensor_to_body_rpy_deg: [180.0, 0.0, 180.0],
+        time_offset_s: 0.0,
+        gap_policy: GapPolicy::default(),
+    }
+}
+
+fn check_imu(src: &ImuSource) -> Result<(), String> {
+    let Ok(mut r) = navfuse_io::imu::open_imu(src) else {
+        return Ok(());
+    };
+    let mut prev = None;
+    for s in r.by_ref() {
+        let Ok(s) = s else { return Ok(()) };
+        increasing("IMU time", &mut prev, s.t)?;
+        std_ok("IMU dt", s.dt)?;
+        for v in s.dtheta.iter().chain(s.dvel.iter()) {
+            finite("IMU increment", *v)?;
+        }
+    }
+    r.report().to_string();
+    Ok(())
+}
+
+fn kfgins_imu(p: &Path) -> Result<(), String> {
+    check_imu(&imu_src(p, ImuFormat::KfGins, 200.0))
+}
+
+fn csv_imu(p: &Path) -> Result<(), String> {
+    let o = CsvImuOptions {
+        skip_lines: 2,
+        time_col: 0,
+        gyro_cols: [4, 5, 6],
+        accel_cols: [1, 2, 3],
+        time_unit: TimeUnit::Seconds,
+        time_scale: TimeScale::GpsSecondsOfWeek,
+        quantity: ImuQuantity::Rate,
+        rate_sampling: RateSampling::Instant,
+        gyro_unit: GyroUnit::Deg,
+        accel_unit: AccelUnit::G,
+    };
+    check_imu(&imu_src(p, ImuFormat::Csv(o), 100.0))
+}
+
+fn check_gnss(p: &Path, format: GnssFormat) -> Result<(), String> {
+    let src = GnssSource {
+        path: p.to_path_buf(),
+        format,
+        decimate_s: None,
+        time_offset_s: 0.0,
+    };
+    let Ok(d) = navfuse_io::gnss::read_gnss(&src) else {
+        return Ok(());
+    };
+    let mut prev = None;
+    for f in &d.fixes {
+        increasing("GNSS time", &mut prev, f.t)?;
+        for v in f.lla.iter().chain(f.vel_ned.iter().flatten()) {
+            finite("GNSS value", *v)?;
+        }
+        for v in f.std_ned.iter().chain(f.vel_std_ned.iter().flatten()) {
+            std_ok("GNSS std", *v)?;
+        }
+        if f.lla.x.abs() > std::f64::consts::FRAC_PI_2 + 1e-12 {
+            return Err(format!("latitude {} rad accepted", f.lla.x));
+        }
+    }
+    Ok(())
+}
+
+fn gnss_kfgins(p: &Path) -> Result<(), String> {
+    check_gnss(p, GnssFormat::KfGins)
+}
+
+fn gnss_pos(p: &Path) -> Result<(), String> {
+    check_gnss(p, GnssFormat::RtklibPos { quality: vec![] })
+}
+
+fn heading(p: &Path) -> Result<(), String> {
+    let Ok(h) = navfuse_io::heading::read_heading(p) else {
+        return Ok(());
+    };
+    let mut prev = None;
+    for o in &h {
+        increasing("heading time", &mut prev, o.t)?;
+        finite("heading", o.heading_rad)?;
+        std_ok("heading std", o.std_rad)?;
+    }
+    Ok(())
+}
+
+fn check_odometer(p: &Path, format: OdometerFormat) -> Result<(), String> {
+    let src = OdometerSource {
+        path: p.to_path_buf(),
+        format,
+    };
+    let Ok(o) = navfuse_io::odometer::read_odometer(&src) else {
+        return Ok(());
+    };
+    let mut prev = None;
+    for s in &o {
+        increasing("odometer time", &mut prev, s.t)?;
+        finite("odometer speed", s.speed_mps)?;
+        finite("odometer interval", s.interval_s)?;
+        if s.interval_s < 0.0 {
+            return Err(format!("negative interval {}", s.interval_s));
+        }
+    }
+    Ok(())
+}
+
+fn odometer_speed(p: &Path) -> Result<(), String> {
+    check_odometer(
+        p,
+        OdometerFormat::Speed {
+            speed_is_mean: true,
+        },
+    )
+}
+
+fn odometer_navfuse(p: &Path) -> Result<(), String> {
+    check_odometer(
+        p,
+        OdometerFormat::Navfuse {
+            meters_per_pulse: 0.01,
+        },
+    )
+}
+
+fn dgps(p: &Path) -> Result<(), String> {
+    let Ok(f) = navfuse_io::dgps::read_dgps_file(p) else {
+        return Ok(());
+    };
+    let mut prev: Option<f64> = None;
+    for c in &f.corrections {
+        for v in [c.t_s, c.prc_m, c.rrc_mps] {
+            finite("DGPS value", v)?;
+        }
+        if prev.is_some_and(|p| c.t_s < p) {
+            return Err(format!("DGPS time {} goes backwards", c.t_s));
+        }
+        prev = Some(c.t_s);
+    }
+    for v in f.reference_lla.iter().flatten() {
+        finite("station position", *v)?;
+    }
+    Ok(())
+}
+
+fn nav(p: &Path) -> Result<(), String> {
+    let Ok(n) = navfuse_io::nav::read_nav(p) else {
+        return Ok(());
+    };
+    let mut prev = None;
+    for (w, s) in &n {
+        increasing("nav time", &mut prev, f64::from(*w) * 604_800.0 + s.t)?;
+        for v in s.lla.iter().chain(s.v_n.iter()).chain(s.q_bn.coords.iter()) {
+            finite("nav value", *v)?;
+        }
+    }
+    Ok(())
+}
+
+fn rinex_nav(p: &Path) -> Result<(), String> {
+    let Ok(n) = navfuse_io::rinex_nav::read_rinex_nav(p) else {
+        return Ok(());
+    };
+    for e in &n.gps {
+        for dt in [-7200.0, 0.0, 3600.0] {
+            let t: GpsTime = e.toe.add_s(dt);
+            let s = e.sat_state(t);
+            for v in s.pos_ecef_m.iter().chain(s.vel_ecef_mps.iter()) {
+                finite(&format!("satellite state of PRN {}", e.prn), *v)?;
+            }
+            finite("satellite clock", s.clock_bias_s)?;
+            finite("satellite clock drift", s.clock_drift_s_per_s)?;
+        }
+    }
+    Ok(())
+}
+
+fn rinex_obs(p: &Path) -> Result<(), String> {
+    let Ok(r) = navfuse_io::rinex_obs::read_rinex_obs_report(p) else {
+        return Ok(());
+    };
+    let mut prev: Option<GpsTime> = None;
+    for e in &r.epochs {
+        finite("epoch time", e.t.sow)?;
+        if let Some(p) = prev {
+            if e.t.diff_s(&p) < 0.0 {
+                return Err(format!("epoch time goes backwards: {:?} after {p:?}", e.t));
+            }
+        }
+        prev = Some(e.t);
+        for s in &e.sats {
+            let vals = [s.pseudorange_m, s.carrier_cycles, s.doppler_hz, s.cn0_dbhz];
+            for v in vals.iter().flatten() {
+                finite("observation", *v)?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// An accepted config: no NaN/inf in it (except the open start time) and a fixpoint
+/// of `to_toml_string` after one round trip.
+fn check_config(cfg: &RunConfig, path: &Path) -> Result<(), String> {
+    let dbg = format!("{:?}", cfg.nav).replace("start_time: -inf", "");
+    if dbg.contains("NaN") || dbg.contains("inf") {
+        return Err(format!("config holds NaN/inf: {dbg}"));
+    }
+    let i = &cfg.imu;
+    let mut vals = vec![i.rate_hz, i.time_offset_s];
+    vals.extend(i.sensor_to_body_rpy_deg);
+    if let Some(g) = &cfg.gnss {
+        vals.push(g.time_offset_s);
+        vals.extend(g.decimate_s);
+    }
+    for v in vals {
+        finite("config source value", v)?;
+    }
+    round_trip(cfg, path)
+}
+
+/// load(to_toml_string(cfg)) loads, and writing it again gives the same text.
+pub fn round_trip(cfg: &RunConfig, path: &Path) -> Result<(), String> {
+    let body = |s: &str| {
+        let v: Vec<&str> = s.lines().skip_while(|l| l.starts_with('#')).collect();
+        v.join("\n")
+    };
+    let s1 = cfg.to_toml_string();
+    let c2 = parse_toml_str(&s1, path)
+        .map_err(|e| format!("to_toml_string output does not load: {e}\n{s1}"))?;
+    let s2 = c2.to_toml_string();
+    if body(&s1) != body(&s2) {
+        let diff: Vec<String> = s1
+            .lines()
+            .zip(s2.lines())
+            .filter(|(a, b)| a != b)
+            .map(|(a, b)| format!("{a}  ->  {b}"))
+            .collect();
+        return Err(format!(
+            "round trip changes the config: {}",
+            diff.join("; ")
+        ));
+    }
+    Ok(())
+}
+
+fn config(p: &Path) -> Result<(), String> {
+    match load(p) {
+        Ok(c) => check_config(&c, p),
+        Err(_) => Ok(()),
+    }
+}
+
+fn targets() -> Vec<Target> {
+    let t = |name, ext, seeds: &[&str], check| Target {
+        name,
+        ext,
+        seeds: seeds.iter().map(|s| seed(s)).collect(),
+        check,
+    };
+    let inline = |name, ext, text: &str, check| Target {
+        name,
+        ext,
+        seeds: vec![text.as_bytes().to_vec()],
+        check,
+    };
+    let f = "crates/io/tests/data/fuzz/";
+    vec![
+        t("kfgins_imu", "txt", &[&format!("{f}kfgins_imu.txt")], kfgins_imu as Check),
+        t("csv_imu", "csv", &[&format!("{f}demo_imu.csv")], csv_imu),
+        t("gnss_kfgins", "txt", &[&format!("{f}kfgins_gnss.txt")], gnss_kfgins),
+        t("gnss_pos", "pos", &[&format!("{f}demo.pos")], gnss_pos),
+        inline(
+            "heading",
+            "txt",
+            "# t heading std\n100.0 10.5 0.2\n100.2 350.0 0.2\n100.4 -179.0 0.5\n101 0 1e-3\n",
+            heading,
+        ),
+        inline(
+            "odometer_speed",
+            "txt",
+            "# t speed\n10.00 1.5\n10.10 1.6\n10.20,1.7\n10.35 0\n",
+            odometer_speed,
+        ),
+        inline(
+            "odometer_navfuse",
+            "txt",
+            "10.0 1000 0 5.0\n10.1 1050 50 5.0\n10.2 1100 50 5.0\n10.3 1151 51 5.1\n",
+            odometer_navfuse,
+        ),
+        inline(
+            "dgps",
+            "csv",
+            "# reference station lat 40.0 deg lon -105.0 deg h 1600.0 m\nt_s,prn,prc_m,rrc_mps,iode\n\
+             345600.0,5,-2.5,0.01,77\n345600.0,12,1.25,-0.002,\n345601.0,5,-2.49,0.01,77\n\
+             604799.0,7,3.0,0.0,12\n1.0,7,3.1,0.0,12\n",
+            dgps,
+        ),
+        t("nav", "nav", &[&format!("{f}truth.nav")], nav),
+        t("rinex_nav", "nav", &[&format!("{f}walk_0827.nav")], rinex_nav),
+        t(
+            "rinex_obs",
+            "obs",
+            &[
+                "crates/io/tests/data/hand_v211.obs",
+                "crates/io/tests/data/walk_0827_3ep_v211.obs",
+                "crates/io/tests/data/walk_0827_3ep_v304.obs",
+            ],
+            rinex_obs,
+        ),
+        t(
+            "config_toml",
+            "toml",
+            &[
+                "examples/demo/drive_excerpt.toml",
+                "examples/drive_0708.toml",
+                "examples/drive_0708_nhc.toml",
+                "examples/kfgins-synthetic.toml",
+                "examples/kfgins-synthetic-outages.toml",
+                "examples/walk_0827_tight.toml",
+            ],
+            config,
+        ),
+        t("config_yaml", "yaml", &[&format!("{f}kfgins.yaml")], config),
+    ]
+}
+
+fn env_u64(key: &str) -> Option<u64> {
+    let v = std::env::var(key).ok()?;
+    let v = v.trim();
+    match v.strip_prefix("0x") {
+        Some(h) => u64::from_str_radix(h, 16).ok(),
+        None => v.parse().ok(),
+    }
+}
+
+struct Outcome {
+    cases: u64,
+    failures: Vec<String>,
+    elapsed: Duration,
+}
+
+/// Run `cases` mutated cases of one target in a worker thread; a case that does not
+/// finish within [`HANG`] fails the run.
+fn run_target(t: Target, cases: u64, base: u64, dir: PathBuf) -> Outcome {
+    let (tx, rx) = mpsc::channel::<(u64, Option<String>)>();
+    let name = t.name;
+    let worker = std::thread::spawn(move || {
+        let file = dir.join(format!("{}.{}", t.name, t.ext));
+        for k in 0..cases {
+            let case_seed = base ^ k.wrapping_mul(0x9E37_79B9_7F4A_7C15);
+            let mut rng = Rng::new(case_seed);
+            let s = &t.seeds[rng.below(t.seeds.len())];
+            let data = mutate(s, &mut rng);
+            if std::fs::write(&file, &data).is_err() {
+                let _ = tx.send((case_seed, Some("cannot write the case file".into())));
+                return;
+            }
+            let check = t.check;
+            let r = std::panic::catch_unwind(|| check(&file));
+            let fail = match r {
+                Ok(Ok(())) => None,
+                Ok(Err(m)) => Some(m),
+                Err(p) => Some(format!(
+                    "PANIC: {}",
+                    p.downcast_ref::<String>()
+                        .cloned()
+                        .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
+                        .unwrap_or_default()
+                )),
+            };
+            if fail.is_some() {
+                let _ = std::fs::write(dir.join(format!("fail-{}-{case_seed:x}", t.name)), &data);
+            }
+            if tx.send((case_seed, fail)).is_err() {
+                return;
+            }
+        }
+    });
+    let start = Instant::now();
+    let mut out = Outcome {
+        cases: 0,
+        failures: Vec::new(),
+        elapsed: Duration::ZERO,
+    };
+    while out.cases < cases {
+        match rx.recv_timeout(HANG) {
+            Ok((case_seed, fail)) => {
+                out.cases += 1;
+                if let Some(m) = fail {
+                    let m: String = m.chars().take(600).collect();
+                    out.failures
+                        .push(format!("{name} case seed 0x{case_seed:x}: {m}"));
+                }
+            }
+            Err(mpsc::RecvTimeoutError::Timeout) => {
+                out.failures.push(format!(
+                    "{name}: HANG, a case ran over {HANG:?} after {} cases",
+                    out.cases
+                ));
+                out.elapsed = start.elapsed();
+                return out; // the worker is left behind; the test fails
+            }
+            Err(mpsc::RecvTimeoutError::Disconnected) => break,
+        }
+    }
+    let _ = worker.join();
+    out.elapsed = start.elapsed();
+    out
+}
+
+#[test]
+fn fuzz_every_reader_and_config() {
+    let cases = env_u64("NAVFUSE_FUZZ_CASES").unwrap_or(DEFAULT_CASES);
+    let base = env_u64("NAVFUSE_FUZZ_SEED").unwrap_or(DEFAULT_SEED);
+    let only = std::env::var("NAVFUSE_FUZZ_ONLY").ok();
+    let dir = std::env::temp_dir().join(format!("navfuse-fuzz-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // Panics are caught and reported per case; keep their default messages quiet.
+    std::panic::set_hook(Box::new(|_| {}));
+    let mut failures = Vec::new();
+    let mut handles = Vec::new();
+    for (i, t) in targets().into_iter().enumerate() {
+        if only.as_deref().is_some_and(|o| o != t.name) {
+            continue;
+        }
+        let (d, b) = (dir.clone(), base.wrapping_add((i as u64) << 40));
+        let name = t.name;
+        handles.push((name, std::thread::spawn(move || run_target(t, cases, b, d))));
+        // Two cores: at most two targets at a time.
+        if handles.len() == 2 {
+            for (name, h) in handles.drain(..) {
+                report(name, h.join().unwrap(), &mut failures);
+            }
+        }
+    }
+    for (name, h) in handles.drain(..) {
+        report(name, h.join().unwrap(), &mut failures);
+    }
+    let _ = std::panic::take_hook();
+    assert!(
+        failures.is_empty(),
+        "{} failures (base seed 0x{base:x}, inputs saved in {}):\n{}",
+        failures.len(),
+        dir.display(),
+        failures.join("\n")
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+fn report(name: &str, o: Outcome, failures: &mut Vec<String>) {
+    let rate = o.cases as f64 / o.elapsed.as_secs_f64().max(1e-9);
+    println!(
+        "fuzz {name}: {} cases in {:.1} s ({rate:.0} cases/s), {} failures",
+        o.cases,
+        o.elapsed.as_secs_f64(),
+        o.failures.len()
+    );
+    failures.extend(o.failures);
+}
