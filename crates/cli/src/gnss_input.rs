@@ -12,7 +12,7 @@ use navfuse_gnss::tight_prep::{EpochPreparer, TightPrepConfig};
 use navfuse_gnss::{EphemerisSet, ObsEpoch};
 use navfuse_io::input::{DgpsKind, GnssSource, RinexGnss};
 use navfuse_io::rinex_nav::read_rinex_nav;
-use navfuse_io::rinex_obs::read_rinex_obs;
+use navfuse_io::rinex_obs::{read_rinex_obs, read_rinex_obs_report};
 
 /// What the GNSS layer made of a RINEX input. Times are seconds of `gps_week`
 /// (the first observation's week) plus the source's time offset.
@@ -24,6 +24,8 @@ pub struct RinexInput {
     pub gps_week: u32,
     /// Facts worth a line in the run summary.
     pub notes: Vec<String>,
+    /// The readers' findings that did not stop the read (a damaged last record).
+    pub warnings: Vec<String>,
 }
 
 /// The GNSS layer's settings for a RINEX input.
@@ -51,7 +53,9 @@ pub fn load_rinex(src: &GnssSource, r: &RinexGnss) -> Result<RinexInput> {
     }
     let iono = IonoModel::from_broadcast(nav.iono_alpha, nav.iono_beta);
     let ephs = EphemerisSet::new(nav.gps);
-    let epochs = read_rinex_obs(&src.path).map_err(err)?;
+    let obs = read_rinex_obs_report(&src.path).map_err(err)?;
+    let mut warnings: Vec<String> = nav.warnings.iter().chain(&obs.warnings).cloned().collect();
+    let epochs = obs.epochs;
     let Some(week) = epochs.first().map(|e| e.t.week) else {
         anyhow::bail!("{}: no GPS observation epochs", src.path.display());
     };
@@ -92,6 +96,7 @@ pub fn load_rinex(src: &GnssSource, r: &RinexGnss) -> Result<RinexInput> {
         raw: Vec::with_capacity(epochs.len()),
         gps_week: week.max(0) as u32,
         notes: Vec::new(),
+        warnings: std::mem::take(&mut warnings),
     };
     let (mut no_fix, mut dgps_applied, mut dgps_missing) = (0usize, 0usize, 0usize);
     for e in &epochs {

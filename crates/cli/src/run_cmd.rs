@@ -301,6 +301,9 @@ fn navigate(
     let mut time_offset_pass1 = None;
     let mut raw: Vec<GnssRawEpoch> = Vec::new();
     let mut gnss_skipped = 0;
+    // GNSS readers' findings that did not stop the read (a damaged last line
+    // dropped); the IMU reader's come with its report after the run.
+    let mut reader_warnings: Vec<String> = Vec::new();
     let (mut fixes, gnss_week): (Vec<GnssFix>, Option<u32>) = match &cfg.gnss {
         Some(
             src @ GnssSource {
@@ -310,6 +313,7 @@ fn navigate(
         ) => {
             let g = crate::gnss_input::load_rinex(src, r)?;
             input_notes.extend(g.notes);
+            reader_warnings.extend(g.warnings);
             match r.coupling {
                 Coupling::Loose => (g.fixes, Some(g.gps_week)),
                 Coupling::Tight => {
@@ -320,6 +324,7 @@ fn navigate(
         }
         Some(src) => {
             let g = read_gnss(src).map_err(|e| anyhow::anyhow!("{e}"))?;
+            reader_warnings.extend(g.warnings);
             gnss_skipped = g.skipped;
             if g.skipped > 0 {
                 input_notes.push(format!(
@@ -353,6 +358,11 @@ fn navigate(
         }
         _ => Vec::new(),
     };
+    check(
+        job,
+        warn,
+        reader_warnings.into_iter().map(Finding::warning).collect(),
+    )?;
     // Put GNSS times (fixes and heading) on the IMU's week reference.
     if let (Some(wi), Some(wg)) = (imu_week, gnss_week) {
         let shift = (wg as f64 - wi as f64) * WEEK_S;
