@@ -226,6 +226,10 @@ fn variants() -> Vec<Variant> {
 /// is the one before the attack (the first spoofed one, at its start, already carries
 /// the false velocity) and the next the true one at its end.
 fn withhold_gnss_over_attack(c: &mut RunConfig, sc: &Scenario) {
+    // Fused as under the monitor (white fixes, no gate), so that the bound is the
+    // monitored filter's own.
+    c.nav.gnss.gate_probability = None;
+    c.nav.gnss.fix_error = navfuse_core::config::FixErrorOptions::white();
     if let Some((a, b)) = attack_window_rel(sc) {
         let t0 = sc.file.start.time_s;
         c.nav.gnss.outages.windows.push(Window {

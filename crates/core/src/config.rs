@@ -125,8 +125,9 @@ pub struct FixErrorOptions {
     pub corr_time_s: f64,
     /// Share of each fix's position variance that is time-correlated, in [0, 1).
     pub corr_fraction: f64,
-    /// Accepted fixes in the adaptive variance-scale window; 0 = off.
-    pub adaptive_window: usize,
+    /// Fixes in the robust innovation-scale window (fix_error.rs
+    /// `InnovationScale`); 0 = the tests use the filter's own covariance.
+    pub scale_window: usize,
     /// Tail probability beyond which a fix is down-weighted (IGG-III, up to the
     /// gate); None = full weight up to the gate.
     pub robust_probability: Option<f64>,
@@ -134,6 +135,12 @@ pub struct FixErrorOptions {
     /// [s], the filter re-admits them (its position and velocity uncertainty widened
     /// to the disagreement); a shorter burst stays rejected.
     pub readmit_s: f64,
+    /// A fix beyond the gate is rejected only when its innovation also exceeds
+    /// 3 std + a dt²/2 (dt since the last fix used; velocity: 3 std + a dt): the
+    /// drift an INS with this acceleration error can plausibly have [m/s²]. Inside
+    /// that bound it is taken with a reduced weight (a MEMS INS in a hard manoeuvre
+    /// is often further off than its covariance says).
+    pub floor_accel_mps2: f64,
 }
 
 impl Default for FixErrorOptions {
@@ -141,9 +148,10 @@ impl Default for FixErrorOptions {
         FixErrorOptions {
             corr_time_s: 60.0,
             corr_fraction: 0.5,
-            adaptive_window: 60,
-            robust_probability: Some(0.01),
+            scale_window: 60,
+            robust_probability: Some(1e-3),
             readmit_s: 30.0,
+            floor_accel_mps2: 1.0,
         }
     }
 }
@@ -154,7 +162,7 @@ impl FixErrorOptions {
         FixErrorOptions {
             corr_time_s: 0.0,
             corr_fraction: 0.0,
-            adaptive_window: 0,
+            scale_window: 0,
             robust_probability: None,
             ..Self::default()
         }

@@ -22,7 +22,7 @@ use crate::config::{AttitudeInit, GnssFusion, NavConfig, NhcMode, RangeRate};
 use crate::earth::{c_ne, lla_add_ned, lla_diff_ned, lla_to_ecef};
 use crate::error_model::{fill_f, fill_qc, Discretizer, MeanMotion};
 use crate::filter::{chi2_threshold, Eskf, UpdateOutcome};
-use crate::fix_error::{igg3_factor, AdaptiveScale, FixBias, RejectStreak};
+use crate::fix_error::{igg3_factor, FixBias, InnovationScale, RejectStreak};
 use crate::integrity::{
     EpochCheck, IntegrityMonitor, IntegrityReference, IntegrityState, StepInput, Transition,
 };
@@ -223,8 +223,8 @@ pub struct Navigator {
     /// Time-correlated fix error (with the `GnssBias` block) and the adaptive
     /// variance scales of fix position and velocity (fix_error.rs).
     fix_bias: FixBias,
-    fix_pos_scale: AdaptiveScale,
-    fix_vel_scale: AdaptiveScale,
+    fix_pos_scale: InnovationScale,
+    fix_vel_scale: InnovationScale,
     /// Time of the last GNSS fix used (GNSS time) for the NHC outage mode.
     last_gnss_used_t: f64,
     /// Previous fix (course from displacement when fixes carry no velocity).
@@ -341,8 +341,13 @@ impl Navigator {
         if cfg.tight.enabled {
             layout.push(Block::ClockBias);
             layout.push(Block::ClockDrift);
-        } else if cfg.gnss.fix_error.correlated() && cfg.gnss.fusion == GnssFusion::ErrorState {
-            // Its variance is set from the first fix's std (set_fix_bias_sigma).
+        } else if cfg.gnss.fix_error.correlated()
+            && cfg.gnss.fusion == GnssFusion::ErrorState
+            && !cfg.integrity.enabled
+        {
+            // Its variance is set from the first fix's std (set_fix_bias_sigma). Not
+            // under the integrity monitor, which carries its own Gauss-Markov model
+            // (integrity.gnss_corr_time_s): the states would absorb a slow drift.
             layout.push(Block::GnssBias);
         }
         let n = layout.len();
@@ -408,8 +413,8 @@ impl Navigator {
             reject_streak_since: None,
             fix_streak: None,
             fix_bias: FixBias::default(),
-            fix_pos_scale: AdaptiveScale::new(cfg.gnss.fix_error.adaptive_window),
-            fix_vel_scale: AdaptiveScale::new(cfg.gnss.fix_error.adaptive_window),
+            fix_pos_scale: InnovationScale::new(cfg.gnss.fix_error.scale_window),
+            fix_vel_scale: InnovationScale::new(cfg.gnss.fix_error.scale_window),
             last_gnss_used_t: t0,
             prev_fix: None,
             detector: StaticDetector::new(cfg.zupt.window_s),
@@ -685,46 +690,52 @@ impl Navigator {
         }
     }
 
-    /// A loosely coupled fix row (position or velocity): the reported variance scaled
-    /// by `scale` (white share x adaptive factor), the gate, and IGG-III
-    /// down-weighting between the robust threshold and the gate (fix_error.rs).
-    /// Returns what was done, the innovation and diag(H P H^T) before the update.
+    /// A loosely coupled fix row (position or velocity) with R = `r_share` x the
+    /// reported variance, tested with NIS / `test_scale` (the robust innovation
+    /// scale): down-weighted by IGG-III between the robust threshold and the gate;
+    /// beyond the gate rejected when some row of the innovation is also beyond
+    /// `floor` (what the INS can plausibly have drifted), else taken with the weight
+    /// that brings it to the gate (fix_error.rs). Returns what was done, the NIS with
+    /// the unscaled test and the innovation.
     fn fuse_fix_row(
         &mut self,
         aiding: Aiding,
-        scale: f64,
+        r_share: f64,
+        test_scale: f64,
         gate_p: Option<f64>,
-    ) -> (Fused, Option<(DVector<f64>, Vec<f64>)>) {
+        floor: f64,
+    ) -> (Fused, Option<f64>, Option<DVector<f64>>) {
         self.flush_covariance();
         let ctx = self.context(self.tight.clock);
         let Some(mut lin) = aiding.linearize(&ctx) else {
-            return (Fused::NotApplicable, None);
+            return (Fused::NotApplicable, None, None);
         };
-        lin.r *= scale;
+        lin.r *= r_share;
         let dof = lin.y.len();
-        let hph: Vec<f64> = (0..dof)
-            .map(|i| {
-                let row = lin.h.row(i);
-                (row * &self.filter.p * row.transpose())[(0, 0)]
-            })
-            .collect();
-        let seen = Some((lin.y.clone(), hph));
-        let gate = chi2_gate(dof, gate_p);
-        if let (Some(g), Some(p0), Some(nis)) = (
-            gate,
-            self.cfg.gnss.fix_error.robust_probability,
-            self.filter.nis(&lin.y, &lin.h, &lin.r),
-        ) {
-            let k0 = (chi2_threshold(dof, p0) / dof as f64).sqrt();
+        let nis = self.filter.nis(&lin.y, &lin.h, &lin.r);
+        let y = Some(lin.y.clone());
+        // The gate on NIS / scale: the update's own test sees the scaled threshold.
+        let gate = chi2_gate(dof, gate_p).map(|g| g * test_scale);
+        if let (Some(g), Some(nis)) = (gate, nis) {
+            let t = (nis / dof as f64).sqrt();
             let k1 = (g / dof as f64).sqrt();
-            let w = igg3_factor((nis / dof as f64).sqrt(), k0, k1);
-            if w > 0.0 && w < 1.0 {
+            let w = match self.cfg.gnss.fix_error.robust_probability {
+                _ if t >= k1 && lin.y.amax() > floor => 0.0,
+                _ if t >= k1 => (k1 / t).powi(2),
+                Some(p0) => igg3_factor(
+                    t,
+                    (chi2_threshold(dof, p0) * test_scale / dof as f64).sqrt(),
+                    k1,
+                ),
+                None => 1.0,
+            };
+            if w > 0.0 {
                 lin.r /= w;
-                // Down-weighted, not rejected: the gate already passed.
-                return (self.fuse_linearized(&aiding, &lin, None), seen);
+                // Down-weighted, not rejected.
+                return (self.fuse_linearized(&aiding, &lin, None), Some(nis), y);
             }
         }
-        (self.fuse_linearized(&aiding, &lin, gate), seen)
+        (self.fuse_linearized(&aiding, &lin, gate), nis, y)
     }
 
     /// The correlated share of this fix's variance drives the Gauss-Markov states; a
@@ -921,20 +932,25 @@ impl Navigator {
                 self.fix_streak = None;
             }
         }
-        let pos_scale = white * self.fix_pos_scale.scale();
-        let (fused, seen) = self.fuse_fix_row(Aiding::GnssPosition(&f), pos_scale, gate_p);
-        let used = fused == Fused::Applied;
-        if let (true, Some((y, hph))) = (used, &seen) {
-            let r: Vec<f64> = f.std_ned.iter().map(|s| s * s * pos_scale).collect();
-            self.fix_pos_scale.observe(y.as_slice(), hph, &r);
+        let lambda = self.fix_pos_scale.scale();
+        // What the INS can have drifted since the last fix used: 3 sigma of the fixes
+        // plus half the plausible acceleration error over the time since.
+        let since = (fix.t - self.last_gnss_used_t).max(0.0);
+        let a = fe.floor_accel_mps2;
+        let floor = 3.0 * f.std_ned.amax() + 0.5 * a * since * since;
+        let (fused, nis, y) =
+            self.fuse_fix_row(Aiding::GnssPosition(&f), white, lambda, gate_p, floor);
+        if let Some(nis) = nis {
+            self.fix_pos_scale.observe(nis, 3);
         }
+        let used = fused == Fused::Applied;
         if used {
             self.summary.gnss_used += 1;
             self.fix_streak = None;
             self.last_gnss_used_t = fix.t;
         } else {
             self.summary.gnss_rejected += 1;
-            if let (Fused::Rejected, Some((y, _))) = (fused, &seen) {
+            if let (Fused::Rejected, Some(y)) = (fused, y) {
                 let y = Vector3::new(y[0], y[1], y[2]);
                 let vel_std = self.vel_std_ned_mps();
                 match self.fix_streak.as_mut() {
@@ -943,12 +959,13 @@ impl Navigator {
                 }
             }
         }
-        if let (true, Some(vstd)) = (use_vel, f.vel_std_ned) {
-            let vel_scale = self.fix_vel_scale.scale();
-            let (fv, seen) = self.fuse_fix_row(Aiding::GnssVelocity(&f), vel_scale, gate_p);
-            if let (Fused::Applied, Some((y, hph))) = (fv, &seen) {
-                let r: Vec<f64> = vstd.iter().map(|s| s * s * vel_scale).collect();
-                self.fix_vel_scale.observe(y.as_slice(), hph, &r);
+        if use_vel && f.vel_ned.is_some() {
+            let lambda = self.fix_vel_scale.scale();
+            let floor = 3.0 * f.vel_std_ned.map_or(0.0, |s| s.amax()) + a * since;
+            let (_, nis, _) =
+                self.fuse_fix_row(Aiding::GnssVelocity(&f), 1.0, lambda, gate_p, floor);
+            if let Some(nis) = nis {
+                self.fix_vel_scale.observe(nis, 3);
             }
         }
         if self.cfg.heading.course_over_ground && used {

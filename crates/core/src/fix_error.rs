@@ -7,12 +7,16 @@
 //!   2012 §8.2). A fix is r_GNSS = r_ant + b + v with v white, so y = r_ant,INS + b_est
 //!   - r_GNSS ~ dr + db + ... and R = (1 - rho) std². sigma_b² = rho std² follows the
 //!   fix's reported std (a better solution type bounds the correlated error anew).
-//! - Adaptive variance scale (innovation-based, Mohamed & Schwarz 1999 eq. 24): the
-//!   window mean of (y_i² - (H P H^T)_ii) / R_ii over accepted fixes, at least 1, scales
-//!   R when the receiver's reported std is optimistic.
+//! - Robust innovation scale (`InnovationScale`): the median of NIS / dof over recent
+//!   fixes against the chi-square median, at least 1; the tests divide the NIS by it
+//!   (the variance factor estimated from residuals, as a robust M-estimator scales its
+//!   residuals by their median before weighting them: Huber 1981 §5; Yang et al. 2002).
 //! - Robust down-weighting: IGG-III (Yang, Song & Xu 2002) on t = sqrt(NIS / dof):
-//!   full weight up to k0, weight k0/t ((k1 - t)/(k1 - k0))² up to k1 (the gate),
-//!   rejected beyond.
+//!   full weight up to k0, weight k0/t ((k1 - t)/(k1 - k0))² up to k1 (the gate).
+//!   Beyond the gate a fix is rejected when its innovation also exceeds the drift an
+//!   INS can plausibly have since the last fix used (3 std + a dt²/2); inside that
+//!   floor it is taken with weight (k1/t)² (a MEMS INS in a hard manoeuvre is often
+//!   further off than its covariance says, and rejecting it starts a cascade).
 //! - Re-admission after a rejection streak: only when the rejected fixes agree with
 //!   each other (consecutive innovations change by less than their 3-sigma) for
 //!   `readmit_s`, so a short burst of bad fixes, however consistent, stays out.
@@ -47,61 +51,59 @@ impl FixBias {
     }
 }
 
-/// Window mean of the excess innovation variance ratio; 1 until the window has
-/// `min_samples`.
+/// Robust scale of the innovations: the median of NIS / dof over the last `window`
+/// tested measurements against the median of chi-square(dof) / dof, at least 1. The
+/// gate and the down-weighting test NIS / scale, so they judge a fix against the
+/// spread the filter really shows (a MEMS INS under vibration is often 2-3x less
+/// certain than its noise model says) while the update keeps the reported variance.
+/// A median, so a burst of outliers shorter than half the window does not move it.
 #[derive(Clone, Debug)]
-pub struct AdaptiveScale {
+pub struct InnovationScale {
     window: usize,
     ratios: VecDeque<f64>,
-    sum: f64,
 }
 
-impl AdaptiveScale {
-    /// Largest scale applied (R at most 100x the reported variance).
+impl InnovationScale {
+    /// Largest scale applied.
     pub const MAX: f64 = 100.0;
 
     pub fn new(window: usize) -> Self {
-        AdaptiveScale {
+        InnovationScale {
             window,
             ratios: VecDeque::new(),
-            sum: 0.0,
         }
     }
 
-    /// Record one accepted measurement: innovation `y`, diag(H P H^T) and diag(R)
-    /// with R already scaled by the current factor (the ratio is taken back to the
-    /// reported variance).
-    pub fn observe(&mut self, y: &[f64], hph_diag: &[f64], r_diag: &[f64]) {
-        if self.window == 0 {
+    /// Record one tested measurement of `dof` rows with normalised innovation squared
+    /// `nis` (computed with the reported variance).
+    pub fn observe(&mut self, nis: f64, dof: usize) {
+        if self.window == 0 || !nis.is_finite() || dof == 0 {
             return;
         }
-        let s = self.scale();
-        let n = y.len().max(1) as f64;
-        let ratio: f64 = y
-            .iter()
-            .zip(hph_diag)
-            .zip(r_diag)
-            .map(|((y, hph), r)| {
-                // One sample's excess, clipped at 25 (5 sigma) so one outlier that
-                // passed the gate cannot inflate the window.
-                ((y * y - hph) / (r / s)).clamp(0.0, 25.0 * s)
-            })
-            .sum::<f64>()
-            / n;
-        self.ratios.push_back(ratio);
-        self.sum += ratio;
+        self.ratios.push_back(nis / chi2_median(dof));
         while self.ratios.len() > self.window {
-            self.sum -= self.ratios.pop_front().unwrap_or(0.0);
+            self.ratios.pop_front();
         }
     }
 
-    /// The factor on R: at least 1, at most [`Self::MAX`], 1 until half the window.
+    /// The factor on the innovation covariance for the tests: 1 until a quarter of
+    /// the window is seen, then the median ratio within [1, MAX].
     pub fn scale(&self) -> f64 {
-        if self.window == 0 || self.ratios.len() < self.window.div_ceil(2) {
+        if self.window == 0 || self.ratios.len() < self.window.div_ceil(4).max(5) {
             return 1.0;
         }
-        (self.sum / self.ratios.len() as f64).clamp(1.0, Self::MAX)
+        let mut v: Vec<f64> = self.ratios.iter().copied().collect();
+        let mid = v.len() / 2;
+        let (_, m, _) = v.select_nth_unstable_by(mid, f64::total_cmp);
+        m.clamp(1.0, Self::MAX)
     }
+}
+
+/// Median of chi-square with `dof` degrees of freedom (Wilson-Hilferty: 3.4 % high
+/// for 1 dof, 0.6 % for 3, less beyond).
+pub fn chi2_median(dof: usize) -> f64 {
+    let k = dof as f64;
+    k * (1.0 - 2.0 / (9.0 * k)).powi(3)
 }
 
 /// A run of gate-rejected fixes and whether they agree with each other.
@@ -168,27 +170,28 @@ mod tests {
     }
 
     #[test]
-    fn adaptive_scale_finds_an_optimistic_std() {
-        let mut a = AdaptiveScale::new(40);
-        // Innovations 3x their reported sigma (R = 1, H P H^T = 0.1).
+    fn innovation_scale_is_the_robust_spread() {
+        let mut a = InnovationScale::new(40);
+        // NIS of 3 dof at 9x their expected spread, and a burst of 10 outliers.
         let mut k = 0u64;
-        for _ in 0..200 {
+        for i in 0..200 {
             k = k
                 .wrapping_mul(6364136223846793005)
                 .wrapping_add(1442695040888963407);
             let u = (k >> 11) as f64 / (1u64 << 53) as f64;
-            let sign = if u < 0.5 { -1.0 } else { 1.0 };
-            let y = sign * 3.0 * 1.05f64.sqrt();
-            let s = a.scale();
-            a.observe(&[y], &[0.1], &[s]);
+            // Exponential-ish spread around the chi-square median, scaled by 9.
+            let nis = 9.0 * chi2_median(3) * (0.5 + u);
+            a.observe(if (100..110).contains(&i) { 1e6 } else { nis }, 3);
         }
-        assert!((a.scale() - 9.35).abs() < 0.3, "{}", a.scale());
-        // Consistent innovations leave R alone.
-        let mut b = AdaptiveScale::new(40);
+        assert!((a.scale() - 9.0).abs() < 1.0, "{}", a.scale());
+        // Consistent innovations give 1.
+        let mut b = InnovationScale::new(40);
         for _ in 0..100 {
-            b.observe(&[1.0], &[0.5], &[1.0]);
+            b.observe(0.5 * chi2_median(1), 1);
         }
         assert_eq!(b.scale(), 1.0);
+        assert!((chi2_median(3) / 2.366 - 1.0).abs() < 0.007);
+        assert!((chi2_median(1) / 0.4549 - 1.0).abs() < 0.035);
     }
 
     #[test]

@@ -781,11 +781,13 @@ struct TGnss {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     error_corr_fraction: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    adaptive_window: Option<f64>,
+    scale_window: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     robust_probability: Option<Gate>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     readmit_s: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    floor_accel_mps2: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     outages: Option<Vec<Vec<f64>>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -2293,12 +2295,12 @@ fn convert_gnss(
                 ))
             }
         },
-        adaptive_window: match g.adaptive_window {
-            None => fd.adaptive_window,
+        scale_window: match g.scale_window {
+            None => fd.scale_window,
             Some(w) if w >= 0.0 && w <= 1e6 && w.fract() == 0.0 => w as usize,
             Some(w) => {
                 return Err(kerr(
-                    "gnss.adaptive_window",
+                    "gnss.scale_window",
                     format!("expected a whole number of fixes in [0, 1000000] (0 = off), got {w}"),
                 ))
             }
@@ -2309,6 +2311,13 @@ fn convert_gnss(
             fd.robust_probability,
         )?,
         readmit_s: opt_or("gnss.readmit_s", g.readmit_s, positive, same, fd.readmit_s)?,
+        floor_accel_mps2: opt_or(
+            "gnss.floor_accel_mps2",
+            g.floor_accel_mps2,
+            non_negative,
+            same,
+            fd.floor_accel_mps2,
+        )?,
     };
     if let (Some(r), Some(gp)) = (fix_error.robust_probability, gate_probability) {
         if r <= gp {
@@ -2683,9 +2692,10 @@ impl TGnss {
             gate_timeout_s: None,
             error_corr_time_s: None,
             error_corr_fraction: None,
-            adaptive_window: None,
+            scale_window: None,
             robust_probability: None,
             readmit_s: None,
+            floor_accel_mps2: None,
             outages: None,
             outage_every: None,
             fusion: None,
@@ -2866,9 +2876,10 @@ fn to_raw(c: &RunConfig) -> TomlRoot {
             gate_timeout_s: Some(go.gate_timeout_s),
             error_corr_time_s: Some(go.fix_error.corr_time_s),
             error_corr_fraction: Some(go.fix_error.corr_fraction),
-            adaptive_window: Some(go.fix_error.adaptive_window as f64),
+            scale_window: Some(go.fix_error.scale_window as f64),
             robust_probability: Some(Gate::from_option(go.fix_error.robust_probability)),
             readmit_s: Some(go.fix_error.readmit_s),
+            floor_accel_mps2: Some(go.fix_error.floor_accel_mps2),
             outages: (!go.outages.windows.is_empty()).then(|| {
                 go.outages
                     .windows
@@ -3438,7 +3449,7 @@ fn kfgins_to_raw(y: KfYaml, w: &mut Vec<String>) -> KResult<(TomlRoot, Option<St
             gate_timeout_s: None,
             error_corr_time_s: Some(0.0),
             error_corr_fraction: Some(0.0),
-            adaptive_window: Some(0.0),
+            scale_window: Some(0.0),
             robust_probability: Some(Gate::Off),
             outages: None,
             outage_every: None,

@@ -84,6 +84,11 @@ fn assert_nav_close(a: &navfuse_core::config::NavConfig, b: &navfuse_core::confi
     v(&a.gnss.lever_arm_b, &b.gnss.lever_arm_b, "lever");
     assert_eq!(a.gnss.use_velocity, b.gnss.use_velocity);
     assert_eq!(a.gnss.gate_probability, b.gnss.gate_probability);
+    let fe = |g: &navfuse_core::config::GnssOptions| {
+        let f = g.fix_error;
+        (f.correlated(), f.scale_window, f.robust_probability)
+    };
+    assert_eq!(fe(&a.gnss), fe(&b.gnss));
     assert_eq!(a.gnss.position_std_override, b.gnss.position_std_override);
     assert_eq!(a.filter, b.filter);
     assert_eq!((a.start_time, a.end_time), (b.start_time, b.end_time));

@@ -658,9 +658,18 @@ fn write_run_config(sc: &Scenario, dir: &Path, files: &mut Vec<String>) -> Resul
     );
     if let Some(gs_) = &sc.file.gnss {
         let l = gs_.antenna_lever_arm_m;
-        if gs_.fix.is_some() {
+        if let Some(fix) = &gs_.fix {
+            // The fix errors are Gauss-Markov with the reported std (gnss_sim.rs):
+            // the filter's shaping states with that correlation time, nearly all of
+            // the variance correlated.
+            let (tau, share) = if fix.corr_time_s > 0.0 {
+                (fix.corr_time_s, 0.95)
+            } else {
+                (0.0, 0.0)
+            };
             s.push_str(&format!(
-                "[gnss]\nfile = \"gnss.txt\"\nformat = \"kf-gins\"\nlever_arm_m = [{}, {}, {}]\n\n",
+                "[gnss]\nfile = \"gnss.txt\"\nformat = \"kf-gins\"\nlever_arm_m = [{}, {}, {}]\n\
+                 error_corr_time_s = {tau}\nerror_corr_fraction = {share}\n\n",
                 l[0], l[1], l[2]
             ));
         } else if gs_.raw {

@@ -53,24 +53,41 @@ pub fn navfuse_ok(args: &[&str]) -> String {
 /// `navfuse sim SCENARIO --out OUT -q` (scenario relative to the repository root or
 /// absolute).
 pub fn simulate(scenario: &Path, out: &Path) {
-    navfuse_ok(&[
+    simulate_seed(scenario, out, None);
+}
+
+/// [`simulate`] with the scenario's seed replaced by `seed`.
+pub fn simulate_seed(scenario: &Path, out: &Path, seed: Option<u64>) {
+    let seed = seed.map(|s| s.to_string());
+    let mut args = vec![
         "sim",
         scenario.to_str().unwrap(),
         "--out",
         out.to_str().unwrap(),
         "-q",
-    ]);
+    ];
+    if let Some(s) = &seed {
+        args.extend(["--seed", s.as_str()]);
+    }
+    navfuse_ok(&args);
 }
 
 /// `navfuse run CONFIG --out OUT -q`.
 pub fn run(config: &Path, out: &Path) {
-    navfuse_ok(&[
+    run_with(config, out, &[]);
+}
+
+/// `navfuse run CONFIG --out OUT -q EXTRA...`.
+pub fn run_with(config: &Path, out: &Path, extra: &[&str]) {
+    let mut args = vec![
         "run",
         config.to_str().unwrap(),
         "--out",
         out.to_str().unwrap(),
         "-q",
-    ]);
+    ];
+    args.extend_from_slice(extra);
+    navfuse_ok(&args);
 }
 
 /// Position error vectors NED [m] of `solution.nav` against `truth.nav` at the whole
