@@ -280,6 +280,12 @@ pub struct FilterOptions {
     pub covariance_period_s: f64,
     /// Estimate a GNSS-IMU time offset.
     pub time_offset: Option<TimeOffsetConfig>,
+    /// Over an IMU gap (an interval longer than 0.1 s and 5 nominal intervals,
+    /// bridged by the reader) the INS knows nothing of the motion: the velocity and
+    /// attitude variances grow by (a dt)² and (w dt)², the position's by
+    /// (a dt²/2)², with these plausible vehicle dynamics [m/s², rad/s].
+    pub gap_accel_mps2: f64,
+    pub gap_rate: f64,
 }
 
 impl Default for FilterOptions {
@@ -287,6 +293,8 @@ impl Default for FilterOptions {
         FilterOptions {
             covariance_period_s: DEFAULT_COVARIANCE_PERIOD_S,
             time_offset: None,
+            gap_accel_mps2: 2.0,
+            gap_rate: 10f64.to_radians(),
         }
     }
 }

@@ -49,6 +49,9 @@ pub enum Event {
     },
     /// A measurement's innovation covariance was singular; dropped.
     Singular { t: f64, source: &'static str },
+    /// An IMU interval of `dt` seconds from `t` (a gap the reader bridged): the INS
+    /// uncertainty was grown by the plausible motion over it.
+    ImuGap { t: f64, dt: f64 },
     /// Fixes had been rejected for `streak_s` seconds; this one was used ungated.
     GateBypassed { t: f64, streak_s: f64 },
     /// Loose coupling: fixes rejected for `streak_s` seconds had agreed with each
@@ -93,6 +96,10 @@ impl std::fmt::Display for Event {
             Event::Rejected { t, source, nis, threshold } => write!(
                 f,
                 "{t:.3} {source} rejected: normalised innovation squared {nis:.1} > gate {threshold:.1}"
+            ),
+            Event::ImuGap { t, dt } => write!(
+                f,
+                "{t:.3} imu gap of {dt:.3} s bridged: position, velocity and attitude uncertainty grown by the plausible motion ([filter] gap_accel_mps2, gap_rate_dps)"
             ),
             Event::Singular { t, source } => {
                 write!(f, "{t:.3} {source} dropped: innovation covariance not positive definite")
@@ -281,6 +288,9 @@ struct TightState {
     /// Time of the last epoch with a pseudorange fused (None: none yet).
     last_pr_used_t: Option<f64>,
 }
+
+/// IMU intervals longer than this (and than 5 nominal intervals) are gaps [s].
+const GAP_MIN_S: f64 = 0.1;
 
 /// Chi-square gate for `dof` rows at tail probability `p`.
 fn chi2_gate(dof: usize, p: Option<f64>) -> Option<f64> {
@@ -570,6 +580,24 @@ impl Navigator {
             six.follow_dr(&self.nav);
             self.six_state_out = six.solution(&self.nav);
         }
+    }
+
+    /// [`Navigator::propagate`]; over a piece of an IMU gap (`gap`) the position,
+    /// velocity and attitude variances first grow by the plausible motion over it
+    /// (`filter.gap_accel_mps2`, `gap_rate`), which the bridged increments do not see.
+    fn propagate_bridged(&mut self, raw: &ImuSample, gap: bool) {
+        if gap && raw.dt > 0.0 {
+            self.flush_covariance();
+            let f = &self.cfg.filter;
+            let (a, w, dt) = (f.gap_accel_mps2, f.gap_rate, raw.dt);
+            let p = &mut self.filter.p;
+            for k in 0..3 {
+                p[(POS + k, POS + k)] += (0.5 * a * dt * dt).powi(2);
+                p[(VEL + k, VEL + k)] += (a * dt).powi(2);
+                p[(ATT + k, ATT + k)] += (w * dt).powi(2);
+            }
+        }
+        self.propagate(raw);
     }
 
     /// Propagate the covariance over the accumulated span (SYSTEM.md §2).
@@ -1965,10 +1993,23 @@ pub fn run<E: From<NavError>>(
         .count();
     let mut t_prev = t_start - n.time_offset();
     let period = output_period_s.filter(|p| *p > 0.0);
+    let mut nominal_dt = f64::INFINITY;
     for item in start.replay.into_iter().map(Ok).chain(imu) {
         let s = item?;
         if s.t > end {
             break;
+        }
+        // A gap the reader bridged: the INS knows nothing of the motion over it.
+        if n.summary.imu_samples < 100 && s.dt > 0.0 {
+            nominal_dt = nominal_dt.min(s.dt);
+        }
+        let gap = s.dt > GAP_MIN_S.max(5.0 * nominal_dt);
+        if gap {
+            n.summary.events.push(Event::ImuGap {
+                t: s.t - s.dt,
+                dt: s.dt,
+            });
+            n.detector.clear();
         }
         // Each measurement due in (t_k - dt, t_k]: integrate up to its time, apply it.
         let mut rest = IntervalRest::new(s);
@@ -1981,14 +2022,14 @@ pub fn run<E: From<NavError>>(
                 }
                 Due::Apply { m, t_eff } => {
                     if let Some(piece) = rest.cut_until(t_eff) {
-                        n.propagate(&piece);
+                        n.propagate_bridged(&piece, gap);
                     }
                     n.apply(m);
                 }
             }
         }
         if let Some(piece) = rest.take_rest() {
-            n.propagate(&piece);
+            n.propagate_bridged(&piece, gap);
         }
         n.apply_constraints();
         n.summary.imu_samples += 1;
@@ -2068,7 +2109,7 @@ mod tests {
             },
             filter: FilterOptions {
                 covariance_period_s: 0.0,
-                time_offset: None,
+                ..Default::default()
             },
             vehicle: Default::default(),
             nhc: Default::default(),

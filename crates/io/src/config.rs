@@ -1050,6 +1050,10 @@ struct TFilter {
     covariance_period_s: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     time_offset: Option<TTimeOffset>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    gap_accel_mps2: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    gap_rate_dps: Option<f64>,
 }
 
 #[derive(Debug, Deserialize, Serialize)]
@@ -1522,6 +1526,20 @@ fn convert(raw: TomlRoot, base: &Path) -> KResult<Converted> {
         filter: FilterOptions {
             covariance_period_s,
             time_offset,
+            gap_accel_mps2: opt_or(
+                "filter.gap_accel_mps2",
+                f.gap_accel_mps2,
+                non_negative,
+                same,
+                FilterOptions::default().gap_accel_mps2,
+            )?,
+            gap_rate: opt_or(
+                "filter.gap_rate_dps",
+                f.gap_rate_dps,
+                non_negative,
+                deg_si,
+                FilterOptions::default().gap_rate,
+            )?,
         },
         vehicle,
         nhc,
@@ -2969,6 +2987,8 @@ fn to_raw(c: &RunConfig) -> TomlRoot {
     };
     let filter = TFilter {
         covariance_period_s: Some(c.nav.filter.covariance_period_s),
+        gap_accel_mps2: Some(c.nav.filter.gap_accel_mps2),
+        gap_rate_dps: Some(r2d(c.nav.filter.gap_rate)),
         time_offset: c.nav.filter.time_offset.map(|t| TTimeOffset {
             estimate: Some(t.std_s > 0.0),
             initial_s: Some(t.initial_s),
@@ -3492,10 +3512,7 @@ fn kfgins_to_raw(y: KfYaml, w: &mut Vec<String>) -> KResult<(TomlRoot, Option<St
         nhc: None,
         zupt: None,
         spoofing: None,
-        filter: TFilter {
-            covariance_period_s: None,
-            time_offset: None,
-        },
+        filter: TFilter::default(),
         output: TOutput {
             rate_hz: None,
             imu_err: Some(true),
