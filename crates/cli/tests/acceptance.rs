@@ -360,19 +360,10 @@ fn gate_rejects_a_planted_outlier() {
         "-q",
     ]);
     // Gated: the same run in navfuse TOML (examples/kfgins-synthetic.toml) plus the gate.
-    let toml = std::fs::read_to_string(repo().join("examples/kfgins-synthetic.toml"))
-        .unwrap()
-        .replace(
-            "../../shared/data/kf-gins/synthetic/GNSS.txt",
-            &dir.join("GNSS.txt").display().to_string(),
-        )
-        .replace(
-            "../../shared/data/kf-gins/synthetic/IMU.txt",
-            &syn.join("IMU.txt").display().to_string(),
-        );
-    assert!(toml.contains("[gnss]"));
-    let toml = toml.replacen("[gnss]\n", "[gnss]\ngate_probability = 1e-4\n", 1);
-    std::fs::write(dir.join("gated.toml"), toml).unwrap();
+    let mut cfg = navfuse_io::config::load(&repo().join("examples/kfgins-synthetic.toml")).unwrap();
+    cfg.gnss.as_mut().unwrap().path = dir.join("GNSS.txt");
+    cfg.nav.gnss.gate_probability = Some(1e-4);
+    std::fs::write(dir.join("gated.toml"), cfg.to_toml_string()).unwrap();
     let gated = dir.join("gated");
     run_ok(&[
         "run",

@@ -63,9 +63,20 @@ pub enum Event {
         offset_m: f64,
     },
     /// Tight coupling: no pseudorange had been fused for `gap_s` seconds (outage,
-    /// rejection streak, or dead reckoning under the integrity monitor); the single
-    /// point fix was fused without the gate before the pseudoranges.
-    TightFixUngated { t: f64, gap_s: f64 },
+    /// rejection streak, or dead reckoning under the integrity monitor); the position
+    /// and velocity uncertainty was widened by the single point fix's disagreement
+    /// `offset_m` where the covariance could not explain it (`widened`; the fix then
+    /// fused through the gate), and the carriers restarted.
+    TightReturn {
+        t: f64,
+        gap_s: f64,
+        offset_m: f64,
+        widened: bool,
+    },
+    /// Tight coupling: the carriers of `flagged` of `of` satellites disagreed with the
+    /// INS at once (its velocity, not cycle slips): TDCP is not fused until they
+    /// agree again; Doppler stands in when the receiver gives it.
+    CarriersDistrusted { t: f64, flagged: usize, of: usize },
     /// How the initial attitude was found.
     Aligned {
         t: f64,
@@ -112,9 +123,19 @@ impl std::fmt::Display for Event {
                 f,
                 "{t:.3} gnss fixes re-admitted: rejected for {streak_s:.1} s but consistent with each other; the INS was {offset_m:.2} m away"
             ),
-            Event::TightFixUngated { t, gap_s } => write!(
+            Event::TightReturn {
+                t,
+                gap_s,
+                offset_m,
+                widened,
+            } => write!(
                 f,
-                "{t:.3} single point fix used without the gate: no pseudorange used for {gap_s:.1} s (gate timeout)"
+                "{t:.3} gnss back after {gap_s:.1} s without a pseudorange used: the single point fix is {offset_m:.1} m away{}; carriers restarted (Doppler until they are trusted)",
+                if *widened { ", beyond the covariance: uncertainty widened and the fix fused" } else { ", within the covariance" }
+            ),
+            Event::CarriersDistrusted { t, flagged, of } => write!(
+                f,
+                "{t:.3} carriers of {flagged} of {of} satellites disagree with the INS at once (its velocity, not slips): TDCP paused, Doppler used"
             ),
             Event::Aligned { t, method, rpy_deg } => write!(
                 f,
@@ -287,7 +308,14 @@ struct TightState {
     prev_lever_ecef_m: Vector3<f64>,
     /// Time of the last epoch with a pseudorange fused (None: none yet).
     last_pr_used_t: Option<f64>,
+    /// TDCP is fused from this time on (after a return from a gap, or an epoch whose
+    /// carriers mostly disagreed with the INS, Doppler stands in until then).
+    carriers_trusted_from: f64,
 }
+
+/// After a return from a GNSS gap (or a carrier disagreement), TDCP waits this long
+/// [s] for the pseudoranges and Doppler to correct the INS velocity.
+const CARRIER_WARMUP_S: f64 = 5.0;
 
 /// IMU intervals longer than this (and than 5 nominal intervals) are gaps [s].
 const GAP_MIN_S: f64 = 0.1;
@@ -439,6 +467,7 @@ impl Navigator {
             tight: TightState {
                 prev: vec![None; 256],
                 last_imu_ecef_m: lla_to_ecef(&lla),
+                carriers_trusted_from: f64::NEG_INFINITY,
                 ..Default::default()
             },
             monitor: cfg
@@ -1210,11 +1239,7 @@ impl Navigator {
             opt.use_pseudorange,
         ) {
             if epoch.t - t0 >= self.cfg.gnss.gate_timeout_s {
-                self.fuse_fix_ungated(fix);
-                self.summary.events.push(Event::TightFixUngated {
-                    t: epoch.t,
-                    gap_s: epoch.t - t0,
-                });
+                self.return_from_gap(epoch.t, epoch.t - t0, fix);
                 self.check_clock(epoch.t, &sats);
             }
         }
@@ -1236,7 +1261,21 @@ impl Navigator {
                     .collect();
                 used |= self.fuse_snooped(&rows, beyond_gate, |_, _, _| {});
             }
-            RangeRate::Tdcp => used |= self.fuse_tdcp(epoch.t, &sats),
+            RangeRate::Tdcp => {
+                let trusted = epoch.t >= self.tight.carriers_trusted_from;
+                match self.fuse_tdcp(epoch.t, &sats, trusted) {
+                    Some(u) => used |= u,
+                    // Carriers not trusted (yet): the Doppler, when there is one.
+                    None => {
+                        let rows: Vec<Aiding> = sats
+                            .iter()
+                            .filter(|s| s.range_rate_mps.is_some())
+                            .map(Aiding::Doppler)
+                            .collect();
+                        used |= self.fuse_snooped(&rows, beyond_gate, |_, _, _| {});
+                    }
+                }
+            }
         }
         if opt.use_pseudorange {
             let rows: Vec<Aiding> = sats
@@ -1262,18 +1301,54 @@ impl Navigator {
         }
     }
 
-    /// Fuse a single point fix (position, and velocity when it has one) as a loose
-    /// update without the gate: it pulls back a solution that has drifted beyond the
-    /// pseudorange gates, and corrects attitude and biases through the covariance
-    /// (a plain reset would leave an overconfident attitude). The clock is set again
-    /// at the next epoch and carrier differencing restarts.
-    fn fuse_fix_ungated(&mut self, fix: &GnssFix) {
-        self.fuse(Aiding::GnssPosition(fix), None);
-        if fix.vel_ned.is_some() {
-            self.fuse(Aiding::GnssVelocity(fix), None);
+    /// Back after `gap_s` without a pseudorange used (an outage, a rejection streak,
+    /// dead reckoning under the monitor): the solution may have drifted beyond the
+    /// pseudorange gates and its covariance no longer covers that. The position and
+    /// velocity variances grow by the single point fix's disagreement (so the fix and
+    /// the pseudoranges pass their gates, and an attitude the fix cannot correct is
+    /// not pulled by an overconfident correlation), the fix is fused through the
+    /// gate, the clock is set again, and carrier differencing restarts with Doppler
+    /// standing in for TDCP meanwhile.
+    fn return_from_gap(&mut self, t: f64, gap_s: f64, fix: &GnssFix) {
+        self.flush_covariance();
+        let ctx = self.context(self.tight.clock);
+        let pos = Aiding::GnssPosition(fix).linearize(&ctx);
+        let vel = Aiding::GnssVelocity(fix).linearize(&ctx);
+        // Widen only the axes whose disagreement the covariance cannot explain (beyond
+        // 3 sigma of the prediction and the fix): an INS that is still better than
+        // the single point fix keeps its weight.
+        let mut widened = false;
+        let mut offset_m = 0.0;
+        for (lin, block) in [(&pos, POS), (&vel, VEL)] {
+            let Some(l) = lin else { continue };
+            let hph = &l.h * &self.filter.p * l.h.transpose();
+            for k in 0..3 {
+                let (y2, s2) = (l.y[k].powi(2), hph[(k, k)] + l.r[(k, k)]);
+                if y2 > 9.0 * s2 {
+                    self.filter.p[(block + k, block + k)] += y2;
+                    widened = true;
+                }
+            }
+            if block == POS {
+                offset_m = l.y.norm();
+            }
         }
+        if widened {
+            let gate = chi2_gate(3, Some(1e-4));
+            self.fuse(Aiding::GnssPosition(fix), gate);
+            if fix.vel_ned.is_some() {
+                self.fuse(Aiding::GnssVelocity(fix), gate);
+            }
+        }
+        self.summary.events.push(Event::TightReturn {
+            t,
+            gap_s,
+            offset_m,
+            widened,
+        });
         self.tight.clock_set = false;
         self.tight.prev_t = None;
+        self.tight.carriers_trusted_from = t + CARRIER_WARMUP_S;
     }
 
     /// Set the clock bias (and drift) states from the measurements at the first
@@ -1322,7 +1397,11 @@ impl Navigator {
 
     /// TDCP updates for the satellites tracked continuously since the previous
     /// epoch, with the INS-predicted cycle-slip test; then remember this epoch.
-    fn fuse_tdcp(&mut self, t: f64, sats: &[SatMeasurement]) -> bool {
+    /// TDCP of the carriers continuous since the previous epoch, with the slip test;
+    /// `None` when not fused (`trusted` false, or the carriers of most satellites
+    /// disagreeing with the INS at once). The epoch's carriers are remembered either
+    /// way.
+    fn fuse_tdcp(&mut self, t: f64, sats: &[SatMeasurement], trusted: bool) -> Option<bool> {
         let opt = self.cfg.tight.clone();
         let c_bn = self.nav.q_bn.to_rotation_matrix().into_inner();
         let lever_ecef = c_ne(self.nav.lla.x, self.nav.lla.y) * c_bn * self.cfg.gnss.lever_arm_b;
@@ -1350,18 +1429,39 @@ impl Navigator {
             }
             _ => false,
         };
-        let mut slips = Vec::new();
-        let used = self.fuse_snooped(&rows, slipped, |a, w, blunder| {
-            if let Aiding::Tdcp(s, _, iv) = a {
-                slips.push(Event::CycleSlip {
-                    t,
-                    prn: s.prn,
-                    jump_m: blunder * iv.dt_s,
-                    w,
-                });
-            }
-        });
-        self.summary.events.extend(slips);
+        // Slips are rare and per satellite; most carriers disagreeing at once is the
+        // INS velocity being off (after an outage): not slips, and no TDCP.
+        let flagged = if trusted {
+            self.count_blunders(&rows, slipped)
+        } else {
+            0
+        };
+        let storm = flagged >= 3 && 2 * flagged > rows.len();
+        let used = if !trusted {
+            None
+        } else if storm {
+            self.summary.events.push(Event::CarriersDistrusted {
+                t,
+                flagged,
+                of: rows.len(),
+            });
+            self.tight.carriers_trusted_from = t + CARRIER_WARMUP_S;
+            None
+        } else {
+            let mut slips = Vec::new();
+            let used = self.fuse_snooped(&rows, slipped, |a, w, blunder| {
+                if let Aiding::Tdcp(s, _, iv) = a {
+                    slips.push(Event::CycleSlip {
+                        t,
+                        prn: s.prn,
+                        jump_m: blunder * iv.dt_s,
+                        w,
+                    });
+                }
+            });
+            self.summary.events.extend(slips);
+            Some(used)
+        };
         // Remember this epoch (after the updates: the displacement restarts here).
         for p in self.tight.prev.iter_mut() {
             *p = None;
@@ -1380,6 +1480,31 @@ impl Navigator {
         self.tight.imu_displacement_ecef_m = Vector3::zeros();
         self.tight.last_imu_ecef_m = lla_to_ecef(&self.nav.lla);
         used
+    }
+
+    /// How many of `rows` the joint w-test flags at once (`is_blunder`).
+    fn count_blunders(
+        &mut self,
+        rows: &[Aiding],
+        is_blunder: impl Fn(&Aiding, f64, f64) -> bool,
+    ) -> usize {
+        self.flush_covariance();
+        let ctx = self.context(self.tight.clock);
+        let lins: Vec<(Aiding, Linearized)> = rows
+            .iter()
+            .filter_map(|a| a.linearize(&ctx).map(|l| (*a, l)))
+            .collect();
+        let refs: Vec<&Linearized> = lins.iter().map(|(_, l)| l).collect();
+        let Some(Linearized { y, h, r }) = stack_rows(&refs, self.layout.len()) else {
+            return 0;
+        };
+        self.filter.blunder_test(&y, &h, &r).map_or(0, |tests| {
+            tests
+                .iter()
+                .zip(&lins)
+                .filter(|((w, b), (a, _))| is_blunder(a, *w, *b))
+                .count()
+        })
     }
 
     /// Run the integrity monitor on one GNSS epoch; true if it may be fused. The NIS
