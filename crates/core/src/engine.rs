@@ -1251,29 +1251,20 @@ impl Navigator {
         // before it would change the velocity but not that displacement).
         let w_max = gate.map(f64::sqrt);
         let beyond_gate = |_: &Aiding, w: f64, _: f64| w_max.is_some_and(|m| w.abs() > m);
+        let doppler: Vec<Aiding> = sats
+            .iter()
+            .filter(|s| s.range_rate_mps.is_some())
+            .map(Aiding::Doppler)
+            .collect();
         match opt.range_rate {
             RangeRate::None => {}
-            RangeRate::Doppler => {
-                let rows: Vec<Aiding> = sats
-                    .iter()
-                    .filter(|s| s.range_rate_mps.is_some())
-                    .map(Aiding::Doppler)
-                    .collect();
-                used |= self.fuse_snooped(&rows, beyond_gate, |_, _, _| {});
-            }
+            RangeRate::Doppler => used |= self.fuse_snooped(&doppler, beyond_gate, |_, _, _| {}),
             RangeRate::Tdcp => {
                 let trusted = epoch.t >= self.tight.carriers_trusted_from;
                 match self.fuse_tdcp(epoch.t, &sats, trusted) {
                     Some(u) => used |= u,
                     // Carriers not trusted (yet): the Doppler, when there is one.
-                    None => {
-                        let rows: Vec<Aiding> = sats
-                            .iter()
-                            .filter(|s| s.range_rate_mps.is_some())
-                            .map(Aiding::Doppler)
-                            .collect();
-                        used |= self.fuse_snooped(&rows, beyond_gate, |_, _, _| {});
-                    }
+                    None => used |= self.fuse_snooped(&doppler, beyond_gate, |_, _, _| {}),
                 }
             }
         }
