@@ -268,6 +268,18 @@ pub fn time_offset_prior(std_s: f64) -> Vec<Finding> {
     ))]
 }
 
+/// The GNSS integrity monitor judges GNSS against the dead reckoning: an INS alone
+/// drifts too fast to tell a slow spoofer from its own drift, and then takes the real
+/// signal for the spoofer.
+pub fn spoofing_reference(monitor: bool, odometer: bool, nhc: bool) -> Vec<Finding> {
+    if !monitor || odometer || nhc {
+        return Vec::new();
+    }
+    vec![Finding::warning(
+        "[spoofing] runs with neither an odometer nor the NHC: its reference is the free INS, which drifts too fast to tell a slow spoofer from its own drift (a 0.01 m/s^2 attack goes unseen, and the real GNSS can then be refused); add [odometer] or [nhc] mode = \"always\"",
+    )]
+}
+
 /// A lever arm (`key`, metres) longer than [`MAX_LEVER_ARM_M`].
 pub fn lever_arm(key: &str, arm_m: &Vector3<f64>) -> Vec<Finding> {
     let n = arm_m.norm();
@@ -638,5 +650,13 @@ mod tests {
         assert!(w[0]
             .message
             .contains("sensor-to-body rotation forgotten? set [imu] sensor_to_body_rpy_deg"));
+    }
+
+    #[test]
+    fn spoofing_without_a_reference_warns() {
+        assert_eq!(spoofing_reference(true, false, false).len(), 1);
+        assert!(spoofing_reference(true, true, false).is_empty());
+        assert!(spoofing_reference(true, false, true).is_empty());
+        assert!(spoofing_reference(false, false, false).is_empty());
     }
 }

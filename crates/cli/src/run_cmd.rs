@@ -408,6 +408,11 @@ fn navigate(
     if let Some(to) = cfg.nav.filter.time_offset {
         found.extend(plausibility::time_offset_prior(to.std_s));
     }
+    found.extend(plausibility::spoofing_reference(
+        cfg.nav.integrity.enabled,
+        cfg.nav.odometer.enabled,
+        cfg.nav.nhc.mode != navfuse_core::config::NhcMode::Off,
+    ));
     if let Some(g) = &cfg.gnss {
         found.extend(plausibility::gnss_not_empty(
             &g.path.display().to_string(),

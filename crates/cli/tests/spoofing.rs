@@ -306,10 +306,9 @@ fn tight_coupling_attack_held_by_odometer_reference() {
     std::fs::write(&sc, text).unwrap();
     let sim = dir.join("sim");
     simulate(&sc, &sim);
-    let cfg = std::fs::read_to_string(sim.join("run.toml"))
-        .unwrap()
-        .replace("position_std_m = 0.01\n", "position_std_m = 30\n");
-    assert!(cfg.contains("coupling = \"tight\"") && cfg.contains("position_std_m = 30\n"));
+    let mut run_cfg = navfuse_io::config::load(&sim.join("run.toml")).unwrap();
+    run_cfg.nav.initial.pos_std = nalgebra::Vector3::repeat(30.0);
+    assert!(run_cfg.nav.tight.enabled);
     let (attack_start, attack_end) = (ATTACK_START_S, 450.0);
     // (name, monitor on, GNSS withheld over the attack: the dead-reckoning bound).
     let variants = [
@@ -320,23 +319,26 @@ fn tight_coupling_attack_held_by_odometer_reference() {
     let mut max_attack = std::collections::HashMap::new();
     let mut end_error = std::collections::HashMap::new();
     for (name, monitor, withhold) in variants {
-        let mut text = cfg.clone();
+        let mut c = run_cfg.clone();
         if withhold {
-            text = text.replace(
-                "[gnss]\n",
-                &format!(
-                    "[gnss]\noutages = [[{}, {}]]\n",
-                    T0 + attack_start - 1.0,
-                    T0 + attack_end
-                ),
-            );
+            c.nav
+                .gnss
+                .outages
+                .windows
+                .push(navfuse_core::outage::Window {
+                    start: T0 + attack_start - 1.0,
+                    end: T0 + attack_end,
+                });
         }
-        text.push_str("\n[nhc]\nmode = \"always\"\n");
+        c.nav.nhc.mode = navfuse_core::config::NhcMode::Always;
         if monitor {
-            text.push_str("\n[spoofing]\n");
+            c.nav.integrity = navfuse_core::integrity::IntegrityOptions {
+                enabled: true,
+                ..Default::default()
+            };
         }
         let path = sim.join(format!("run_{name}.toml"));
-        std::fs::write(&path, text).unwrap();
+        std::fs::write(&path, c.to_toml_string()).unwrap();
         let out = dir.join(name);
         run(&path, &out);
         let e: Vec<(f64, f64)> = errors_ned(

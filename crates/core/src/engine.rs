@@ -24,7 +24,8 @@ use crate::error_model::{fill_f, fill_qc, Discretizer, MeanMotion};
 use crate::filter::{chi2_threshold, Eskf, UpdateOutcome};
 use crate::fix_error::{igg3_factor, FixBias, InnovationScale, RejectStreak};
 use crate::integrity::{
-    EpochCheck, IntegrityMonitor, IntegrityReference, IntegrityState, StepInput, Transition,
+    Detector, EpochCheck, IntegrityMonitor, IntegrityReference, IntegrityState, StepInput,
+    Transition,
 };
 use crate::mechanization::Mechanizer;
 use crate::six_state::{ImuFix, SixState, SixStateOutcome};
@@ -1558,6 +1559,16 @@ impl Navigator {
         let v = monitor.check(check);
         if let Some(tr) = v.transition {
             self.summary.events.push(Event::Integrity(tr));
+            // Re-admitted although it still disagrees (the reference went off with an
+            // unseen slow attack): widen the position uncertainty to the disagreement.
+            if tr.detector == Detector::Consistency {
+                if let Some(step) = check.step {
+                    self.flush_covariance();
+                    for k in 0..3 {
+                        self.filter.p[(POS + k, POS + k)] += step.innovation_ned_m[k].powi(2);
+                    }
+                }
+            }
         }
         v.use_gnss
     }

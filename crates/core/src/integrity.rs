@@ -54,6 +54,18 @@ pub struct IntegrityOptions {
     pub confirm_epochs: usize,
     /// Continuous agreement needed before GNSS is used again [s].
     pub readmit_s: f64,
+    /// Refused GNSS that has moved consistently with the reference (each epoch's
+    /// displacement within 3 sigma of the reference's) for this long is re-admitted
+    /// even though it still disagrees in position [s]: after a slow attack that went
+    /// unseen the reference itself is off, and would otherwise refuse the real signal
+    /// for good. A spoofer holding a constant offset this long is re-admitted too
+    /// (logged). None = never.
+    pub max_refuse_s: Option<f64>,
+    /// The drift of the reference against the refused GNSS that `max_refuse_s`
+    /// still counts as consistent [m/s]: an unseen slow attack also leaves the
+    /// reference's velocity off (by less than the window test detects); a spoofer
+    /// drifting faster than this is never re-admitted this way.
+    pub readmit_drift_mps: f64,
     /// Reference of the distance and chi-square tests.
     pub reference: IntegrityReference,
 }
@@ -69,6 +81,8 @@ impl Default for IntegrityOptions {
             gnss_corr_time_s: 0.0,
             confirm_epochs: 2,
             readmit_s: 10.0,
+            max_refuse_s: Some(300.0),
+            readmit_drift_mps: 0.5,
             reference: IntegrityReference::Prediction,
         }
     }
@@ -107,6 +121,8 @@ pub enum Detector {
     Window,
     /// Agreement: every enabled test passed.
     Agreement,
+    /// Refused GNSS moved consistently with the reference for `max_refuse_s`.
+    Consistency,
 }
 
 impl Detector {
@@ -116,6 +132,7 @@ impl Detector {
             Detector::ChiSquare => "chi2",
             Detector::Window => "window",
             Detector::Agreement => "agreement",
+            Detector::Consistency => "consistency",
         }
     }
 }
@@ -191,6 +208,10 @@ pub struct IntegrityMonitor {
     window: VecDeque<(f64, StepInput)>,
     failed_in_row: usize,
     agree_since: f64,
+    /// While refused: since when the epochs have moved consistently with the
+    /// reference, and the step input of the first of them.
+    consistent_since: f64,
+    last_refused: Option<(f64, StepInput)>,
     /// Epochs tested and transitions so far.
     pub epochs: usize,
     pub transitions: Vec<Transition>,
@@ -204,6 +225,8 @@ impl IntegrityMonitor {
             window: VecDeque::new(),
             failed_in_row: 0,
             agree_since: f64::NAN,
+            consistent_since: f64::NAN,
+            last_refused: None,
             epochs: 0,
             transitions: Vec::new(),
         }
@@ -288,6 +311,39 @@ impl IntegrityMonitor {
         worst
     }
 
+    /// While refused (spoofed or recovering): has the GNSS moved consistently with the
+    /// reference for `max_refuse_s`? Each epoch k against the first of the span a:
+    /// e = (y_k - y_a) - (C_k - C_a) within 3 sigma of the two fixes and of the
+    /// reference's drift over the span (sigma_v (t_k - t_a)), plus
+    /// `readmit_drift_mps` (t_k - t_a): a spoofer drifting faster breaks it as the span
+    /// grows; a constant offset, or the reference's own slow drift, does not.
+    fn refused_consistently(&mut self, c: &EpochCheck) -> bool {
+        use IntegrityState::*;
+        let (Some(max), Spoofed | Recovering, Some(k)) =
+            (self.opt.max_refuse_s, self.state, c.step)
+        else {
+            self.last_refused = None;
+            return false;
+        };
+        let consistent = self.last_refused.is_some_and(|(ta, a)| {
+            let dt = c.t - ta;
+            let e = (k.innovation_ned_m - a.innovation_ned_m)
+                - (k.gnss_correction_ned_m - a.gnss_correction_ned_m);
+            (0..3).all(|i| {
+                let var = k.fix_std_ned_m[i].powi(2)
+                    + a.fix_std_ned_m[i].powi(2)
+                    + (k.vel_std_ned_mps[i] * dt).powi(2);
+                e[i].abs() <= 3.0 * var.sqrt() + self.opt.readmit_drift_mps * dt
+            })
+        });
+        if !consistent {
+            // The span restarts here.
+            self.consistent_since = c.t;
+            self.last_refused = Some((c.t, k));
+        }
+        c.t - self.consistent_since >= max
+    }
+
     /// Test one epoch and decide whether its GNSS may be fused.
     pub fn check(&mut self, c: &EpochCheck) -> Verdict {
         use IntegrityState::*;
@@ -308,6 +364,7 @@ impl IntegrityMonitor {
             }
             Spoofed | Recovering => epoch_fail,
         };
+        let refused_long = self.refused_consistently(c);
         let (next, use_gnss) = match (self.state, fail) {
             (Trusted, None) => (Trusted, true),
             (Trusted, Some(_)) => {
@@ -327,6 +384,7 @@ impl IntegrityMonitor {
                     (Suspect, false)
                 }
             }
+            (Spoofed, Some(_)) if refused_long => (Trusted, true),
             (Spoofed, Some(_)) => (Spoofed, false),
             (Spoofed, None) | (Recovering, None) => {
                 if self.state == Spoofed {
@@ -341,8 +399,15 @@ impl IntegrityMonitor {
             (Recovering, Some(_)) => (Spoofed, false),
         };
         let transition = (next != self.state).then(|| {
-            let (detector, statistic, threshold) =
-                fail.unwrap_or((Detector::Agreement, c.nis, f64::NAN));
+            let (detector, statistic, threshold) = match fail {
+                Some(_) if next == Trusted => (
+                    Detector::Consistency,
+                    c.t - self.consistent_since,
+                    self.opt.max_refuse_s.unwrap_or(f64::NAN),
+                ),
+                Some(f) => f,
+                None => (Detector::Agreement, c.nis, f64::NAN),
+            };
             Transition {
                 t: c.t,
                 from: self.state,
@@ -358,6 +423,7 @@ impl IntegrityMonitor {
         }
         if next == Trusted {
             self.failed_in_row = 0;
+            self.last_refused = None;
         }
         self.state = next;
         if let Some(tr) = transition {
@@ -428,6 +494,49 @@ mod tests {
             m2.check(&ep(17.0, 12.0, 1.0)).transition.unwrap().to,
             IntegrityState::Spoofed
         );
+    }
+
+    /// Refused GNSS that keeps a constant offset from the reference (the reference
+    /// went off with an unseen slow attack) is re-admitted after max_refuse_s; one
+    /// that drifts at 2 m/s against it never is (issue 15, finding 11).
+    #[test]
+    fn refused_but_consistent_gnss_is_readmitted_a_drifting_one_is_not() {
+        let step = |t: f64, north_m: f64| {
+            let mut e = ep(t, north_m.abs(), 400.0);
+            e.step = Some(StepInput {
+                innovation_ned_m: Vector3::new(-north_m, 0.0, 0.0),
+                fix_std_ned_m: Vector3::repeat(1.5),
+                vel_std_ned_mps: Vector3::repeat(0.02),
+                gnss_correction_ned_m: Vector3::zeros(),
+                ref_increment_var_ned_m2: Vector3::zeros(),
+            });
+            e
+        };
+        let opt = IntegrityOptions {
+            max_refuse_s: Some(120.0),
+            ..on()
+        };
+        for (drift_mps, readmitted) in [(0.0, true), (0.1, true), (2.0, false)] {
+            let mut m = IntegrityMonitor::new(opt.clone());
+            m.check(&step(0.0, 0.0));
+            let mut back = None;
+            for k in 1..400 {
+                let t = k as f64;
+                // 30 m off from t = 1 s, plus the drift.
+                let v = m.check(&step(t, 30.0 + drift_mps * t));
+                if let Some(tr) = v.transition.filter(|tr| tr.to == IntegrityState::Trusted) {
+                    assert_eq!(tr.detector, Detector::Consistency);
+                    back.get_or_insert(t);
+                }
+            }
+            assert_eq!(back.is_some(), readmitted, "drift {drift_mps}: {back:?}");
+            if let Some(t) = back {
+                assert!(
+                    (t - 122.0).abs() <= 1.0,
+                    "drift {drift_mps}: re-admitted at {t}"
+                );
+            }
+        }
     }
 
     #[test]

@@ -998,6 +998,11 @@ struct TSpoofing {
     confirm_epochs: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     readmit_s: Option<f64>,
+    /// Seconds or false.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    max_refuse_s: Option<Gate>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    readmit_drift_mps: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     gnss_corr_time_s: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -1983,6 +1988,18 @@ fn convert_spoofing(x: &TSpoofing) -> KResult<IntegrityOptions> {
             non_negative,
             same,
             d.readmit_s,
+        )?,
+        max_refuse_s: match x.max_refuse_s {
+            None => d.max_refuse_s,
+            Some(Gate::Off) => None,
+            Some(Gate::Probability(v)) => Some(positive("spoofing.max_refuse_s", v)?),
+        },
+        readmit_drift_mps: opt_or(
+            "spoofing.readmit_drift_mps",
+            x.readmit_drift_mps,
+            non_negative,
+            same,
+            d.readmit_drift_mps,
         )?,
         gnss_corr_time_s: opt_or(
             "spoofing.gnss_corr_time_s",
@@ -3080,6 +3097,8 @@ fn to_raw(c: &RunConfig) -> TomlRoot {
         window_probability: Some(sp.window_probability),
         confirm_epochs: Some(sp.confirm_epochs as f64),
         readmit_s: Some(sp.readmit_s),
+        max_refuse_s: Some(sp.max_refuse_s.map_or(Gate::Off, Gate::Probability)),
+        readmit_drift_mps: Some(sp.readmit_drift_mps),
         gnss_corr_time_s: Some(sp.gnss_corr_time_s),
         reference: Some(match sp.reference {
             IntegrityReference::Prediction => TReference::Prediction,

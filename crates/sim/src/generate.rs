@@ -696,9 +696,18 @@ fn write_run_config(sc: &Scenario, dir: &Path, files: &mut Vec<String>) -> Resul
             o.meters_per_pulse, l[0], l[1], l[2]
         ));
     }
+    // The truth start; with raw measurements only (tight coupling) its uncertainty is
+    // what the pseudoranges can confirm, not 1 cm: with a 1 cm prior the first single
+    // point fix, 10-25 m off with broadcast errors, is a (correct) integrity alarm.
+    let raw_only = sc
+        .file
+        .gnss
+        .as_ref()
+        .is_some_and(|g| g.fix.is_none() && g.raw);
+    let (pos_std, vel_std) = if raw_only { (10.0, 0.1) } else { (0.01, 0.001) };
     s.push_str(&format!(
         "[time]\nstart = {t0}\n\n[initial]\nposition_deg_m = [{:.12}, {:.12}, {:.6}]\nvelocity_mps = [{:.9}, {:.9}, {:.9}]\nattitude_deg = [{:.9}, {:.9}, {:.9}]\n\
-         position_std_m = 0.01\nvelocity_std_mps = 0.001\nattitude_std_deg = 0.01\n\n\
+         position_std_m = {pos_std}\nvelocity_std_mps = {vel_std}\nattitude_std_deg = 0.01\n\n\
          [imu_noise]\narw_deg_sqrth = {arw}\nvrw_mps_sqrth = {vrw}\ngyro_bias_std_degph = {gb}\naccel_bias_std_mgal = {ab}\n\
          gyro_scale_std_ppm = {gs}\naccel_scale_std_ppm = {asc}\ncorr_time_h = {tau_h}\n\n[output]\nimu_err = false\nstd = false\n",
         s0.lla.x.to_degrees(),
