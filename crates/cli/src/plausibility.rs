@@ -410,18 +410,32 @@ pub fn imu_magnitudes(
     out
 }
 
+/// Largest |roll| and |pitch| at the start of a run of any vehicle before a warning
+/// (a body frame upside down or on end) [deg].
+const MAX_ANY_ROLL_DEG: f64 = 100.0;
+const MAX_ANY_PITCH_DEG: f64 = 75.0;
+
 /// Roll and pitch of the aligned attitude [deg]. A land vehicle (NHC or odometer) sits
 /// within a few degrees of level; a tilt beyond [`MAX_LAND_TILT_DEG`] means the sensor
-/// axes were not turned into the body frame.
+/// axes were not turned into the body frame; any vehicle upside down or on end at the
+/// start likewise.
 pub fn aligned_tilt(rpy_deg: [f64; 3], land_vehicle: bool) -> Vec<Finding> {
     let (roll, pitch) = (rpy_deg[0], rpy_deg[1]);
     let tilted = roll.abs() > MAX_LAND_TILT_DEG || pitch.abs() > MAX_LAND_TILT_DEG;
-    if !land_vehicle || !tilted {
-        return Vec::new();
+    // Any vehicle: upside down (or on its nose) at the start is a frame mistake.
+    let inverted = roll.abs() > MAX_ANY_ROLL_DEG || pitch.abs() > MAX_ANY_PITCH_DEG;
+    let hint = "sensor-to-body rotation forgotten? set [imu] sensor_to_body_rpy_deg (e.g. [180, 0, 0] for a sensor z axis pointing up)";
+    if land_vehicle && tilted {
+        return vec![Finding::warning(format!(
+            "the initial attitude has roll {roll:.1} deg, pitch {pitch:.1} deg: a land vehicle (NHC / odometer configured) is close to level; {hint}"
+        ))];
     }
-    vec![Finding::warning(format!(
-        "the initial attitude has roll {roll:.1} deg, pitch {pitch:.1} deg: a land vehicle (NHC / odometer configured) is close to level; sensor-to-body rotation forgotten? set [imu] sensor_to_body_rpy_deg (e.g. [180, 0, 0] for a sensor z axis pointing up)"
-    ))]
+    if inverted {
+        return vec![Finding::warning(format!(
+            "the initial attitude has roll {roll:.1} deg, pitch {pitch:.1} deg: the body frame starts upside down or on end; {hint}"
+        ))];
+    }
+    Vec::new()
 }
 
 #[cfg(test)]
@@ -645,7 +659,8 @@ mod tests {
     #[test]
     fn tilt() {
         assert!(aligned_tilt([2.0, -1.0, 90.0], true).is_empty());
-        assert!(aligned_tilt([179.0, 0.0, 90.0], false).is_empty());
+        assert_eq!(aligned_tilt([179.0, 0.0, 90.0], false).len(), 1);
+        assert!(aligned_tilt([60.0, 0.0, 90.0], false).is_empty());
         let w = aligned_tilt([179.0, 0.5, 90.0], true);
         assert!(w[0]
             .message
@@ -658,5 +673,12 @@ mod tests {
         assert!(spoofing_reference(true, true, false).is_empty());
         assert!(spoofing_reference(true, false, true).is_empty());
         assert!(spoofing_reference(false, false, false).is_empty());
+    }
+
+    #[test]
+    fn upside_down_start_warns_for_any_vehicle() {
+        assert_eq!(aligned_tilt([-178.0, 2.0, 30.0], false).len(), 1);
+        assert!(aligned_tilt([20.0, -10.0, 30.0], false).is_empty());
+        assert_eq!(aligned_tilt([50.0, 0.0, 0.0], true).len(), 1);
     }
 }
