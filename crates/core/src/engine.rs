@@ -1688,7 +1688,10 @@ impl Navigator {
                     if !self.zupt_refused {
                         self.summary.static_s += dt;
                         if z.angular_rate_std > 0.0 {
-                            self.fuse(Aiding::Zaru(rate, z.angular_rate_std), gate);
+                            // The window mean carries the gyro's white noise, ARW/sqrt(T).
+                            let arw = self.cfg.imu_noise.arw.max();
+                            let std = z.angular_rate_std.max(arw / z.window_s.sqrt());
+                            self.fuse(Aiding::Zaru(rate, std), gate);
                         }
                     }
                 }
