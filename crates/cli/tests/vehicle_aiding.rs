@@ -128,10 +128,10 @@ fn seed002_nhc_improves_position_and_attitude() {
 
 /// Seed 001: heading from GNSS lowers the yaw RMSE of the position-only loose filter:
 /// the dual antenna by more than 80 % (measured 88 %; the paper reports 83 %), the
-/// course over ground by more than 50 % (measured 58 %). Before the time-line fix
+/// course over ground by more than 50 % (measured 56 % on these 2 seeds, 65 % on 4).
+/// Before the time-line fix
 /// (issue 15) the heading records at GNSS epochs integrated IMU increments twice in
-/// every variant: dual antenna 70 %, course 65 % against an inflated loose baseline
-/// (docs/RESULTS.md §6).
+/// every variant (dual antenna 70 %) (docs/RESULTS.md §9).
 #[test]
 fn seed001_gnss_heading_improves_yaw() {
     let r = reproduce("seed001", "2");
