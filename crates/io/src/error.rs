@@ -191,7 +191,7 @@ pub fn check_finite_si(value: f64, si: f64) -> Result<f64, String> {
         Ok(si)
     } else {
         Err(format!(
-            "{value} overflows to {si} after conversion to SI units: expected a finite value"
+            "{value:e} overflows to {si} after conversion to SI units: expected a finite value"
         ))
     }
 }
