@@ -79,10 +79,7 @@ fn accelerations_overflowing_after_scaling_rejected() {
     s.format = ImuFormat::Csv(o);
     let r: Vec<_> = open_imu(&s).unwrap().collect();
     let e = r.last().unwrap().as_ref().unwrap_err().to_string();
-    assert!(
-        e.contains(":2: field 'accel_x': 1e308 overflows"),
-        "{e}"
-    );
+    assert!(e.contains(":2: field 'accel_x': 1e308 overflows"), "{e}");
     assert!(
         e.contains("overflows to inf after conversion to SI units"),
         "{e}"
