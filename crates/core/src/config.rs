@@ -106,8 +106,10 @@ pub struct GnssOptions {
     /// Innovation gate: chi-square tail probability at which a fix is rejected
     /// (e.g. 1e-4); None = no gating (KF-GINS behaviour).
     pub gate_probability: Option<f64>,
-    /// After this long [s] of consecutive gate rejections, the next fix is accepted
-    /// anyway (the filter has drifted, or a step in the GNSS is real); logged.
+    /// Six-state fusion: after this long [s] of consecutive gate rejections the next
+    /// fix is accepted anyway (logged). Tight coupling: no pseudorange used for this
+    /// long is a return from a gap (uncertainty widened, carriers restarted).
+    /// Loosely coupled fixes use `fix_error.readmit_s` instead.
     pub gate_timeout_s: f64,
     /// Withheld epochs.
     pub outages: OutageSchedule,

@@ -318,6 +318,10 @@ struct TightState {
 /// [s] for the pseudoranges and Doppler to correct the INS velocity.
 const CARRIER_WARMUP_S: f64 = 5.0;
 
+/// Correlation time of the unknown manoeuvres over an IMU gap [s]: the velocity
+/// random walk's PSD is gap_accel² x this.
+const GAP_MANOEUVRE_S: f64 = 1.0;
+
 /// IMU intervals longer than this (and than 5 nominal intervals) are gaps [s].
 const GAP_MIN_S: f64 = 0.1;
 
@@ -612,19 +616,22 @@ impl Navigator {
         }
     }
 
-    /// [`Navigator::propagate`]; over a piece of an IMU gap (`gap`) the position,
-    /// velocity and attitude variances first grow by the plausible motion over it
-    /// (`filter.gap_accel_mps2`, `gap_rate`), which the bridged increments do not see.
-    fn propagate_bridged(&mut self, raw: &ImuSample, gap: bool) {
-        if gap && raw.dt > 0.0 {
+    /// [`Navigator::propagate`]; over a piece of an IMU gap the velocity and attitude
+    /// variances first grow by the plausible motion the bridged increments do not see:
+    /// random walks of PSD (a T²/2)²/T, a² T and w² T for position, velocity and
+    /// attitude (`filter.gap_accel_mps2`, `gap_rate`; T = [`GAP_MANOEUVRE_S`]), linear
+    /// in dt so the total does not depend on where measurements cut the gap.
+    fn propagate_bridged(&mut self, raw: &ImuSample, gap: Option<f64>) {
+        if let (Some(_), true) = (gap, raw.dt > 0.0) {
             self.flush_covariance();
             let f = &self.cfg.filter;
-            let (a, w, dt) = (f.gap_accel_mps2, f.gap_rate, raw.dt);
+            let (a, w) = (f.gap_accel_mps2, f.gap_rate);
             let p = &mut self.filter.p;
+            let t = GAP_MANOEUVRE_S;
             for k in 0..3 {
-                p[(POS + k, POS + k)] += (0.5 * a * dt * dt).powi(2);
-                p[(VEL + k, VEL + k)] += (a * dt).powi(2);
-                p[(ATT + k, ATT + k)] += (w * dt).powi(2);
+                p[(POS + k, POS + k)] += 0.25 * a * a * t.powi(3) * raw.dt;
+                p[(VEL + k, VEL + k)] += a * a * t * raw.dt;
+                p[(ATT + k, ATT + k)] += w * w * t * raw.dt;
             }
         }
         self.propagate(raw);
@@ -677,6 +684,16 @@ impl Navigator {
             self.fix_bias.propagate(a.dt, tau);
         }
         self.disc.discretize(a.dt);
+        if let Some(i) = self.layout.index(Block::GnssBias) {
+            // Exact first-order Gauss-Markov discretisation (a long span, e.g. a
+            // bridged IMU gap, must not take Phi below zero).
+            let tau = self.cfg.gnss.fix_error.corr_time_s;
+            let e = (-a.dt / tau).exp();
+            for k in 0..3 {
+                self.disc.phi[(i + k, i + k)] = e;
+                self.disc.qd[(i + k, i + k)] = self.fix_bias.sigma_ned_m[k].powi(2) * (1.0 - e * e);
+            }
+        }
         self.filter.predict(&self.disc.phi, &self.disc.qd);
         if let Some(six) = self.six_state.as_mut() {
             // The six-state process noise follows the DR errors (six_state.rs).
@@ -694,11 +711,18 @@ impl Navigator {
         let Some(lin) = aiding.linearize(&ctx) else {
             return Fused::NotApplicable;
         };
-        self.fuse_linearized(&aiding, &lin, gate)
+        self.fuse_linearized(&aiding, &lin, gate, None)
     }
 
     /// Fuse an already linearised measurement of `aiding` (the covariance flushed).
-    fn fuse_linearized(&mut self, aiding: &Aiding, lin: &Linearized, gate: Option<f64>) -> Fused {
+    /// `nis_stat`: the NIS to record for a down-weighted row (that of the reported R).
+    fn fuse_linearized(
+        &mut self,
+        aiding: &Aiding,
+        lin: &Linearized,
+        gate: Option<f64>,
+        nis_stat: Option<f64>,
+    ) -> Fused {
         let logged = matches!(
             aiding,
             Aiding::GnssPosition(_)
@@ -716,6 +740,7 @@ impl Navigator {
         };
         match self.filter.update(&lin.y, &lin.h, &lin.r, gate) {
             UpdateOutcome::Applied { dx, nis } => {
+                let nis = nis_stat.unwrap_or(nis);
                 let e = self.summary.aiding_nis.entry(name).or_default();
                 *e = (e.0 + nis, e.1 + lin.y.len());
                 if let (Some(six), Some(k)) = (self.six_state.as_mut(), gain) {
@@ -749,12 +774,12 @@ impl Navigator {
     }
 
     /// A loosely coupled fix row (position or velocity) with R = `r_share` x the
-    /// reported variance, tested with NIS / `test_scale` (the robust innovation
-    /// scale): down-weighted by IGG-III between the robust threshold and the gate;
-    /// beyond the gate rejected when some row of the innovation is also beyond
-    /// `floor` (what the INS can plausibly have drifted), else taken with the weight
-    /// that brings it to the gate (fix_error.rs). Returns what was done, the NIS with
-    /// the unscaled test and the innovation.
+    /// reported variance, tested with NIS / `test_scale` (the robust innovation scale)
+    /// on t = sqrt(NIS / dof) (fix_error.rs). Within `floor` (what the INS can
+    /// plausibly have drifted) it is never rejected: full weight up to the gate k1,
+    /// Huber weight (k1/t)² beyond.
+    /// Beyond the floor: IGG-III between k0 and the gate k1, rejected beyond. Returns
+    /// what was done, the NIS with the unweighted R, the innovation and the weight.
     fn fuse_fix_row(
         &mut self,
         aiding: Aiding,
@@ -762,11 +787,11 @@ impl Navigator {
         test_scale: f64,
         gate_p: Option<f64>,
         floor: f64,
-    ) -> (Fused, Option<f64>, Option<DVector<f64>>) {
+    ) -> (Fused, Option<f64>, Option<DVector<f64>>, f64) {
         self.flush_covariance();
         let ctx = self.context(self.tight.clock);
         let Some(mut lin) = aiding.linearize(&ctx) else {
-            return (Fused::NotApplicable, None, None);
+            return (Fused::NotApplicable, None, None, 0.0);
         };
         lin.r *= r_share;
         let dof = lin.y.len();
@@ -777,23 +802,31 @@ impl Navigator {
         if let (Some(g), Some(nis)) = (gate, nis) {
             let t = (nis / dof as f64).sqrt();
             let k1 = (g / dof as f64).sqrt();
-            let w = match self.cfg.gnss.fix_error.robust_probability {
-                _ if t >= k1 && lin.y.amax() > floor => 0.0,
-                _ if t >= k1 => (k1 / t).powi(2),
-                Some(p0) => igg3_factor(
-                    t,
-                    (chi2_threshold(dof, p0) * test_scale / dof as f64).sqrt(),
-                    k1,
-                ),
-                None => 1.0,
+            let k0 = self.cfg.gnss.fix_error.robust_probability.map_or(k1, |p0| {
+                (chi2_threshold(dof, p0) * test_scale / dof as f64).sqrt()
+            });
+            let w = if lin.y.amax() <= floor {
+                // Plausible drift: full weight up to the gate, Huber beyond.
+                if t > k1 {
+                    (k1 / t).powi(2)
+                } else {
+                    1.0
+                }
+            } else if k0 < k1 {
+                igg3_factor(t, k0, k1)
+            } else if t < k1 {
+                1.0
+            } else {
+                0.0
             };
             if w > 0.0 {
                 lin.r /= w;
-                // Down-weighted, not rejected.
-                return (self.fuse_linearized(&aiding, &lin, None), Some(nis), y);
+                // Down-weighted (or full weight), not rejected.
+                let fused = self.fuse_linearized(&aiding, &lin, None, Some(nis));
+                return (fused, Some(nis), y, w);
             }
         }
-        (self.fuse_linearized(&aiding, &lin, gate), nis, y)
+        (self.fuse_linearized(&aiding, &lin, gate, nis), nis, y, 1.0)
     }
 
     /// The correlated share of this fix's variance drives the Gauss-Markov states; a
@@ -802,6 +835,7 @@ impl Navigator {
         let Some(i) = self.layout.index(Block::GnssBias) else {
             return;
         };
+        self.flush_covariance();
         let rho = self.cfg.gnss.fix_error.corr_fraction;
         let sigma = std_ned_m * rho.sqrt();
         for k in 0..3 {
@@ -966,7 +1000,10 @@ impl Navigator {
             }
             gate_p = None;
         }
-        self.set_fix_bias_sigma(&f.std_ned);
+        if self.fix_bias.sigma_ned_m == Vector3::zeros() {
+            // The first fix sizes the Gauss-Markov states; later ones once accepted.
+            self.set_fix_bias_sigma(&f.std_ned);
+        }
         let white = if self.layout.index(Block::GnssBias).is_some() {
             1.0 - fe.corr_fraction
         } else {
@@ -974,8 +1011,15 @@ impl Navigator {
         };
         // Rejected fixes that have agreed with each other for readmit_s: the INS has
         // drifted (or the GNSS stepped for good); widen its uncertainty to take them.
+        // A streak interrupted by a gap (an outage) is stale: it starts again.
+        if self
+            .fix_streak
+            .is_some_and(|st| fix.t - st.last_t() > self.cfg.gnss.gate_timeout_s)
+        {
+            self.fix_streak = None;
+        }
         if let (Some(st), Some(_)) = (self.fix_streak, gate_p) {
-            if st.agreed_for(fix.t, fe.readmit_s) {
+            if st.agreed_for(fe.readmit_s) {
                 let y = st.last_innovation();
                 let span = (fix.t - st.since).max(1.0);
                 for k in 0..3 {
@@ -996,17 +1040,23 @@ impl Navigator {
         let since = (fix.t - self.last_gnss_used_t).max(0.0);
         let a = fe.floor_accel_mps2;
         let floor = 3.0 * f.std_ned.amax() + 0.5 * a * since * since;
-        let (fused, nis, y) =
+        let (fused, nis, y, weight) =
             self.fuse_fix_row(Aiding::GnssPosition(&f), white, lambda, gate_p, floor);
         if let Some(nis) = nis {
             self.fix_pos_scale.observe(nis, 3);
         }
         let used = fused == Fused::Applied;
+        // A fix fused with a tenth of its weight or less does not count as a trusted
+        // one: the drift floor keeps growing, and no course update follows.
+        let trusted = used && weight >= 0.1;
         if used {
             self.summary.gnss_used += 1;
+        }
+        if trusted {
             self.fix_streak = None;
             self.last_gnss_used_t = fix.t;
-        } else {
+            self.set_fix_bias_sigma(&f.std_ned);
+        } else if !used {
             self.summary.gnss_rejected += 1;
             if let (Fused::Rejected, Some(y)) = (fused, y) {
                 let y = Vector3::new(y[0], y[1], y[2]);
@@ -1020,13 +1070,13 @@ impl Navigator {
         if use_vel && f.vel_ned.is_some() {
             let lambda = self.fix_vel_scale.scale();
             let floor = 3.0 * f.vel_std_ned.map_or(0.0, |s| s.amax()) + a * since;
-            let (_, nis, _) =
+            let (_, nis, _, _) =
                 self.fuse_fix_row(Aiding::GnssVelocity(&f), 1.0, lambda, gate_p, floor);
             if let Some(nis) = nis {
                 self.fix_vel_scale.observe(nis, 3);
             }
         }
-        if self.cfg.heading.course_over_ground && used {
+        if self.cfg.heading.course_over_ground && trusted {
             if let Some(obs) = self.course_from(&f) {
                 let g = chi2_gate(1, self.cfg.heading.gate_probability);
                 self.fuse(Aiding::Heading(&obs, HeadingAxis::VehicleForward), g);
@@ -1296,11 +1346,13 @@ impl Navigator {
     /// Back after `gap_s` without a pseudorange used (an outage, a rejection streak,
     /// dead reckoning under the monitor): the solution may have drifted beyond the
     /// pseudorange gates and its covariance no longer covers that. The position and
-    /// velocity variances grow by the single point fix's disagreement (so the fix and
-    /// the pseudoranges pass their gates, and an attitude the fix cannot correct is
-    /// not pulled by an overconfident correlation), the fix is fused through the
-    /// gate, the clock is set again, and carrier differencing restarts with Doppler
-    /// standing in for TDCP meanwhile.
+    /// velocity variances grow by the single point fix's disagreement on the axes
+    /// where the covariance cannot explain it (so the fix and the pseudoranges pass
+    /// their gates, and an attitude the fix cannot correct is not pulled by an
+    /// overconfident correlation), the fix is then fused through the gate (only when
+    /// something was widened: otherwise the pseudoranges carry the same), the clock
+    /// is set again, and carrier differencing restarts with Doppler standing in for
+    /// TDCP meanwhile.
     fn return_from_gap(&mut self, t: f64, gap_s: f64, fix: &GnssFix) {
         self.flush_covariance();
         let ctx = self.context(self.tight.clock);
@@ -1560,12 +1612,15 @@ impl Navigator {
         if let Some(tr) = v.transition {
             self.summary.events.push(Event::Integrity(tr));
             // Re-admitted although it still disagrees (the reference went off with an
-            // unseen slow attack): widen the position uncertainty to the disagreement.
+            // unseen slow attack): widen the position uncertainty to the disagreement
+            // and the velocity's by the drift it was allowed.
             if tr.detector == Detector::Consistency {
                 if let Some(step) = check.step {
                     self.flush_covariance();
+                    let v = self.cfg.integrity.readmit_drift_mps;
                     for k in 0..3 {
                         self.filter.p[(POS + k, POS + k)] += step.innovation_ned_m[k].powi(2);
+                        self.filter.p[(VEL + k, VEL + k)] += v * v;
                     }
                 }
             }
@@ -2133,8 +2188,8 @@ pub fn run<E: From<NavError>>(
         if n.summary.imu_samples < 100 && s.dt > 0.0 {
             nominal_dt = nominal_dt.min(s.dt);
         }
-        let gap = s.dt > GAP_MIN_S.max(5.0 * nominal_dt);
-        if gap {
+        let gap = (s.dt > GAP_MIN_S.max(5.0 * nominal_dt)).then_some(s.t - s.dt);
+        if gap.is_some() {
             n.summary.events.push(Event::ImuGap {
                 t: s.t - s.dt,
                 dt: s.dt,

@@ -89,7 +89,7 @@ impl InnovationScale {
     /// The factor on the innovation covariance for the tests: 1 until a quarter of
     /// the window is seen, then the median ratio within [1, MAX].
     pub fn scale(&self) -> f64 {
-        if self.window == 0 || self.ratios.len() < self.window.div_ceil(4).max(5) {
+        if self.window == 0 || self.ratios.len() < self.window.div_ceil(4).max(5).min(self.window) {
             return 1.0;
         }
         let mut v: Vec<f64> = self.ratios.iter().copied().collect();
@@ -144,9 +144,15 @@ impl RejectStreak {
         self.last.1
     }
 
-    /// Rejected and mutually consistent for at least `readmit_s` at `t`.
-    pub fn agreed_for(&self, t: f64, readmit_s: f64) -> bool {
-        t - self.agree_since >= readmit_s
+    /// Time of the latest rejected fix [s].
+    pub fn last_t(&self) -> f64 {
+        self.last.0
+    }
+
+    /// The rejected fixes have agreed with each other over at least `readmit_s`
+    /// (measured between rejected fixes, not up to now: an outage is no agreement).
+    pub fn agreed_for(&self, readmit_s: f64) -> bool {
+        self.last.0 - self.agree_since >= readmit_s
     }
 }
 
@@ -207,8 +213,11 @@ mod tests {
                 v,
             );
         }
-        assert!(s.agreed_for(40.0, 30.0));
+        assert!(s.agreed_for(30.0));
         s.push(41.0, Vector3::new(1000.0, 0.0, 0.0), std, v);
-        assert!(!s.agreed_for(41.0, 30.0) && s.agree_since == 41.0);
+        assert!(!s.agreed_for(30.0) && s.agree_since == 41.0);
+        // One rejected fix and then nothing for a minute is no agreement.
+        let lone = RejectStreak::new(0.0, Vector3::new(50.0, 0.0, 0.0), std);
+        assert!(!lone.agreed_for(30.0));
     }
 }
