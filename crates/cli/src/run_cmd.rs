@@ -12,13 +12,13 @@ use navfuse_core::outage::OutageSchedule;
 use navfuse_core::{GnssFix, GnssRawEpoch, HeadingObs, Navigator, OdometerSample, RunSummary};
 use navfuse_io::config::{self, RunConfig};
 use navfuse_io::gnss::read_gnss;
-use navfuse_io::heading::read_heading;
+use navfuse_io::heading::read_heading_report;
 use navfuse_io::imu::open_imu;
 use navfuse_io::input::{AccelUnit, Coupling, GnssFormat, GnssSource, GyroUnit, ImuFormat};
 use navfuse_io::nav::{
     CsvWriter, ImuErrWriter, NavWriter, RecordWriter, SolutionRecord, StdWriter,
 };
-use navfuse_io::odometer::read_odometer;
+use navfuse_io::odometer::read_odometer_report;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -340,7 +340,8 @@ fn navigate(
     // Odometer (IMU time scale) and dual-antenna heading (GNSS time scale).
     let odometer: Vec<OdometerSample> = match &cfg.odometer {
         Some(src) if cfg.nav.odometer.enabled => {
-            let o = read_odometer(src).map_err(|e| anyhow::anyhow!("{e}"))?;
+            let o = read_odometer_report(src, &mut reader_warnings)
+                .map_err(|e| anyhow::anyhow!("{e}"))?;
             if o.is_empty() {
                 input_notes.push(format!("{}: no odometer samples", src.path.display()));
             }
@@ -350,7 +351,8 @@ fn navigate(
     };
     let mut heading: Vec<HeadingObs> = match &cfg.heading {
         Some(src) if cfg.nav.heading.baseline_b.is_some() => {
-            let h = read_heading(&src.path).map_err(|e| anyhow::anyhow!("{e}"))?;
+            let h = read_heading_report(&src.path, &mut reader_warnings)
+                .map_err(|e| anyhow::anyhow!("{e}"))?;
             if h.is_empty() {
                 input_notes.push(format!("{}: no heading records", src.path.display()));
             }

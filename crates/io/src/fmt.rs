@@ -120,6 +120,27 @@ where
     Ok(())
 }
 
+/// What follows one record's result in a reader that tolerates a damaged last line
+/// when given `warnings`: `Ok(true)` read on, `Ok(false)` stop (the last line, cut
+/// mid-write, dropped with a warning), `Err` the record's error.
+pub fn after_record(
+    result: Result<(), InputError>,
+    ln: usize,
+    lines: &mut LineReader,
+    warnings: &mut Option<&mut Vec<String>>,
+) -> Result<bool, InputError> {
+    match result {
+        Ok(()) => Ok(true),
+        Err(e) if e.line == Some(ln) && warnings.is_some() && lines.cut_last_line() => {
+            if let Some(w) = warnings.as_mut() {
+                w.push(e.last_line_warning());
+            }
+            Ok(false)
+        }
+        Err(e) => Err(e),
+    }
+}
+
 /// An error of [`for_each_line`]'s callback: in a data line (dropped with a warning on
 /// the last line) or fatal wherever it is (a header).
 #[derive(Debug)]

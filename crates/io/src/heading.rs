@@ -12,64 +12,88 @@
 //! gives an empty list.
 
 use crate::error::InputError;
-use crate::fmt::{field, is_comment_line, parse_f64, split_fields, LineReader};
+use crate::fmt::{after_record, field, is_comment_line, parse_f64, split_fields, LineReader};
 use navfuse_core::HeadingObs;
 use std::path::Path;
 
 const WHAT: &str = "t, heading [deg], std [deg]";
 
-/// Read a heading file; see the module documentation.
+/// Read a heading file; see the module documentation. A damaged last line is an
+/// error here; [`read_heading_report`] drops it with a warning.
 pub fn read_heading(path: &Path) -> Result<Vec<HeadingObs>, InputError> {
+    read(path, None)
+}
+
+/// [`read_heading`], with a last line cut mid-write (no line end) dropped and a
+/// warning naming file and line pushed to `warnings`.
+pub fn read_heading_report(
+    path: &Path,
+    warnings: &mut Vec<String>,
+) -> Result<Vec<HeadingObs>, InputError> {
+    read(path, Some(warnings))
+}
+
+fn read(
+    path: &Path,
+    mut warnings: Option<&mut Vec<String>>,
+) -> Result<Vec<HeadingObs>, InputError> {
     let mut lines = LineReader::open(path)?;
     let mut fields = Vec::with_capacity(8);
     let mut out: Vec<HeadingObs> = Vec::new();
     let mut prev: Option<f64> = None;
     while let Some((ln, text)) = lines.next_line()? {
-        split_fields(text, &mut fields);
-        if is_comment_line(text, &fields) {
-            continue;
-        }
-        if fields.len() != 3 {
-            return Err(InputError::columns(path, ln, 3, WHAT, fields.len()));
-        }
-        let num = |k: usize, name: &str| -> Result<f64, InputError> {
-            let s = field(text, &fields, k);
-            match parse_f64(s) {
-                Some(v) if v.is_finite() => Ok(v),
-                Some(v) => Err(InputError::not_finite(path, ln, name, v)),
-                None => Err(InputError::not_a_number(path, ln, name, s)),
+        let mut record = || -> Result<(), InputError> {
+            split_fields(text, &mut fields);
+            if is_comment_line(text, &fields) {
+                return Ok(());
             }
-        };
-        let t = num(0, "t")?;
-        match prev {
-            Some(p) if t == p => {
+            if fields.len() != 3 {
+                return Err(InputError::columns(path, ln, 3, WHAT, fields.len()));
+            }
+            let num = |k: usize, name: &str| -> Result<f64, InputError> {
+                let s = field(text, &fields, k);
+                match parse_f64(s) {
+                    Some(v) if v.is_finite() => Ok(v),
+                    Some(v) => Err(InputError::not_finite(path, ln, name, v)),
+                    None => Err(InputError::not_a_number(path, ln, name, s)),
+                }
+            };
+            let t = num(0, "t")?;
+            match prev {
+                Some(p) if t == p => {
+                    return Err(InputError::at_field(
+                        path,
+                        ln,
+                        "time",
+                        format!("duplicate record: time {t} repeats the previous record"),
+                    ))
+                }
+                Some(p) if t < p => return Err(InputError::backwards(path, ln, t, p)),
+                _ => {}
+            }
+            prev = Some(t);
+            let heading = num(1, "heading")?;
+            if !(heading > -180.0 && heading < 360.0) {
                 return Err(InputError::at_field(
                     path,
                     ln,
-                    "time",
-                    format!("duplicate record: time {t} repeats the previous record"),
-                ))
+                    "heading",
+                    format!("expected a heading in [0, 360) or (-180, 180] deg, found {heading}"),
+                ));
             }
-            Some(p) if t < p => return Err(InputError::backwards(path, ln, t, p)),
-            _ => {}
+            let std = num(2, "std")?;
+            let std_rad = InputError::scale(path, ln, "std", "std", std, std.to_radians())?;
+            out.push(HeadingObs {
+                t,
+                heading_rad: heading.to_radians(),
+                std_rad,
+            });
+            Ok(())
+        };
+        let r = record();
+        if !after_record(r, ln, &mut lines, &mut warnings)? {
+            break;
         }
-        prev = Some(t);
-        let heading = num(1, "heading")?;
-        if !(heading > -180.0 && heading < 360.0) {
-            return Err(InputError::at_field(
-                path,
-                ln,
-                "heading",
-                format!("expected a heading in [0, 360) or (-180, 180] deg, found {heading}"),
-            ));
-        }
-        let std = num(2, "std")?;
-        let std_rad = InputError::scale(path, ln, "std", "std", std, std.to_radians())?;
-        out.push(HeadingObs {
-            t,
-            heading_rad: heading.to_radians(),
-            std_rad,
-        });
     }
     Ok(out)
 }

@@ -17,12 +17,29 @@
 //! without records (or a pulse file with one record) gives an empty list.
 
 use crate::error::InputError;
-use crate::fmt::{field, is_comment_line, parse_f64, split_fields, LineReader};
+use crate::fmt::{after_record, field, is_comment_line, parse_f64, split_fields, LineReader};
 use crate::input::{OdometerFormat, OdometerSource};
 use navfuse_core::OdometerSample;
 
-/// Read an odometer file; see the module documentation.
+/// Read an odometer file; see the module documentation. A damaged last line is an
+/// error here; [`read_odometer_report`] drops it with a warning.
 pub fn read_odometer(src: &OdometerSource) -> Result<Vec<OdometerSample>, InputError> {
+    read(src, None)
+}
+
+/// [`read_odometer`], with a last line cut mid-write (no line end) dropped and a
+/// warning naming file and line pushed to `warnings`.
+pub fn read_odometer_report(
+    src: &OdometerSource,
+    warnings: &mut Vec<String>,
+) -> Result<Vec<OdometerSample>, InputError> {
+    read(src, Some(warnings))
+}
+
+fn read(
+    src: &OdometerSource,
+    mut warnings: Option<&mut Vec<String>>,
+) -> Result<Vec<OdometerSample>, InputError> {
     let path = src.path.as_path();
     let (ncols, what) = match src.format {
         OdometerFormat::Speed { .. } => (2, "t, speed [m/s]"),
@@ -49,111 +66,118 @@ pub fn read_odometer(src: &OdometerSource) -> Result<Vec<OdometerSample>, InputE
     // previous record: time, cumulative pulses (pulse formats)
     let mut prev: Option<(f64, f64)> = None;
     while let Some((ln, text)) = lines.next_line()? {
-        split_fields(text, &mut fields);
-        if is_comment_line(text, &fields) {
-            continue;
-        }
-        if fields.len() != ncols {
-            return Err(InputError::columns(path, ln, ncols, what, fields.len()));
-        }
-        let num = |k: usize, name: &str| -> Result<f64, InputError> {
-            let s = field(text, &fields, k);
-            match parse_f64(s) {
-                Some(v) if v.is_finite() => Ok(v),
-                Some(v) => Err(InputError::not_finite(path, ln, name, v)),
-                None => Err(InputError::not_a_number(path, ln, name, s)),
+        let mut record = || -> Result<(), InputError> {
+            split_fields(text, &mut fields);
+            if is_comment_line(text, &fields) {
+                return Ok(());
             }
-        };
-        let t = num(0, "t")?;
-        if let Some((tp, _)) = prev {
-            if t == tp {
-                return Err(InputError::at_field(
-                    path,
-                    ln,
-                    "time",
-                    format!("duplicate record: time {t} repeats the previous record"),
-                ));
+            if fields.len() != ncols {
+                return Err(InputError::columns(path, ln, ncols, what, fields.len()));
             }
-            if t < tp {
-                return Err(InputError::backwards(path, ln, t, tp));
-            }
-            if !(t - tp).is_finite() {
-                return Err(InputError::at_field(
-                    path,
-                    ln,
-                    "time",
-                    format!("time {t} is too far from the previous record ({tp})"),
-                ));
-            }
-        }
-        match src.format {
-            OdometerFormat::Speed { speed_is_mean } => {
-                let speed = num(1, "speed")?;
-                match (speed_is_mean, prev) {
-                    (false, _) => out.push(OdometerSample {
-                        t,
-                        speed_mps: speed,
-                        interval_s: 0.0,
-                    }),
-                    (true, Some((tp, _))) => out.push(OdometerSample {
-                        t,
-                        speed_mps: speed,
-                        interval_s: t - tp,
-                    }),
-                    // a mean since an unknown time: it only starts the intervals
-                    (true, None) => {}
+            let num = |k: usize, name: &str| -> Result<f64, InputError> {
+                let s = field(text, &fields, k);
+                match parse_f64(s) {
+                    Some(v) if v.is_finite() => Ok(v),
+                    Some(v) => Err(InputError::not_finite(path, ln, name, v)),
+                    None => Err(InputError::not_a_number(path, ln, name, s)),
                 }
-                prev = Some((t, 0.0));
+            };
+            let t = num(0, "t")?;
+            if let Some((tp, _)) = prev {
+                if t == tp {
+                    return Err(InputError::at_field(
+                        path,
+                        ln,
+                        "time",
+                        format!("duplicate record: time {t} repeats the previous record"),
+                    ));
+                }
+                if t < tp {
+                    return Err(InputError::backwards(path, ln, t, tp));
+                }
+                if !(t - tp).is_finite() {
+                    return Err(InputError::at_field(
+                        path,
+                        ln,
+                        "time",
+                        format!("time {t} is too far from the previous record ({tp})"),
+                    ));
+                }
             }
-            OdometerFormat::Pulses { .. } | OdometerFormat::Navfuse { .. } => {
-                let pulses = num(1, "pulses")?;
-                if let OdometerFormat::Navfuse { .. } = src.format {
-                    let n = num(2, "pulses_in_interval")?;
-                    if n < 0.0 {
-                        return Err(InputError::at_field(
-                            path,
-                            ln,
-                            "pulses_in_interval",
-                            format!("expected a pulse count >= 0, found {n}"),
-                        ));
+            match src.format {
+                OdometerFormat::Speed { speed_is_mean } => {
+                    let speed = num(1, "speed")?;
+                    match (speed_is_mean, prev) {
+                        (false, _) => out.push(OdometerSample {
+                            t,
+                            speed_mps: speed,
+                            interval_s: 0.0,
+                        }),
+                        (true, Some((tp, _))) => out.push(OdometerSample {
+                            t,
+                            speed_mps: speed,
+                            interval_s: t - tp,
+                        }),
+                        // a mean since an unknown time: it only starts the intervals
+                        (true, None) => {}
                     }
-                    num(3, "speed")?;
+                    prev = Some((t, 0.0));
                 }
-                if let Some((tp, np)) = prev {
-                    if pulses < np {
-                        return Err(InputError::at_field(
-                            path,
-                            ln,
-                            "pulses",
-                            format!(
+                OdometerFormat::Pulses { .. } | OdometerFormat::Navfuse { .. } => {
+                    let pulses = num(1, "pulses")?;
+                    if let OdometerFormat::Navfuse { .. } = src.format {
+                        let n = num(2, "pulses_in_interval")?;
+                        if n < 0.0 {
+                            return Err(InputError::at_field(
+                                path,
+                                ln,
+                                "pulses_in_interval",
+                                format!("expected a pulse count >= 0, found {n}"),
+                            ));
+                        }
+                        num(3, "speed")?;
+                    }
+                    if let Some((tp, np)) = prev {
+                        if pulses < np {
+                            return Err(InputError::at_field(
+                                path,
+                                ln,
+                                "pulses",
+                                format!(
                                 "cumulative pulse count {pulses} goes backwards (previous {np}): \
                                  expected a non-decreasing count"
                             ),
-                        ));
-                    }
-                    let dt = t - tp;
-                    let k = meters_per_pulse.unwrap_or(0.0);
-                    let speed = k * (pulses - np) / dt;
-                    if !speed.is_finite() {
-                        return Err(InputError::at_field(
-                            path,
-                            ln,
-                            "pulses",
-                            format!(
-                                "{} pulses in {dt} s give a speed of {speed} m/s: expected a \
+                            ));
+                        }
+                        let dt = t - tp;
+                        let k = meters_per_pulse.unwrap_or(0.0);
+                        let speed = k * (pulses - np) / dt;
+                        if !speed.is_finite() {
+                            return Err(InputError::at_field(
+                                path,
+                                ln,
+                                "pulses",
+                                format!(
+                                    "{} pulses in {dt} s give a speed of {speed} m/s: expected a \
                                  finite speed",
-                                pulses - np
-                            ),
-                        ));
+                                    pulses - np
+                                ),
+                            ));
+                        }
+                        out.push(OdometerSample {
+                            t,
+                            speed_mps: speed,
+                            interval_s: dt,
+                        });
                     }
-                    out.push(OdometerSample {
-                        t,
-                        speed_mps: speed,
-                        interval_s: dt,
-                    });
+                    prev = Some((t, pulses));
                 }
-                prev = Some((t, pulses));
             }
+            Ok(())
+        };
+        let r = record();
+        if !after_record(r, ln, &mut lines, &mut warnings)? {
+            break;
         }
     }
     Ok(out)

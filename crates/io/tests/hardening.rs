@@ -238,3 +238,50 @@ fn example_configs_round_trip() {
     }
     assert!(loaded >= 7, "only {loaded} configs loaded");
 }
+
+/// Heading and odometer files cut mid-write: the report readers (what `navfuse run`
+/// uses) drop the damaged last line with a warning naming file and line; the strict
+/// readers refuse it; damage mid-file stays an error for both.
+#[test]
+fn heading_and_odometer_cut_last_line() {
+    use navfuse_io::heading::read_heading_report;
+    use navfuse_io::odometer::{read_odometer, read_odometer_report};
+    let h = write(
+        "cut_heading.txt",
+        b"100.0 10.0 0.5\n101.0 11.0 0.5\n102.0 1",
+    );
+    let mut w = Vec::new();
+    let r = read_heading_report(&h, &mut w).unwrap();
+    assert_eq!(r.len(), 2);
+    assert!(
+        w.len() == 1 && w[0].contains("cut_heading.txt:3: damaged last line dropped"),
+        "{w:?}"
+    );
+    assert!(read_heading(&h).is_err());
+    let mid = write(
+        "mid_heading.txt",
+        b"100.0 10.0 0.5\n101.0 x 0.5\n102.0 12.0 0.5\n",
+    );
+    assert!(read_heading_report(&mid, &mut Vec::new()).is_err());
+    let o = write("cut_odometer.txt", b"10.0 1.5\n10.1 1.6\n10.2 ");
+    let src = OdometerSource {
+        path: o,
+        format: OdometerFormat::Speed {
+            speed_is_mean: true,
+        },
+    };
+    let whole = OdometerSource {
+        path: write("whole_odometer.txt", b"10.0 1.5\n10.1 1.6\n"),
+        format: src.format.clone(),
+    };
+    let mut w = Vec::new();
+    assert_eq!(
+        read_odometer_report(&src, &mut w).unwrap(),
+        read_odometer(&whole).unwrap()
+    );
+    assert!(
+        w.len() == 1 && w[0].contains("cut_odometer.txt:3: damaged last line dropped"),
+        "{w:?}"
+    );
+    assert!(read_odometer(&src).is_err());
+}
