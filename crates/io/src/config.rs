@@ -1447,13 +1447,32 @@ fn convert(raw: TomlRoot, base: &Path) -> KResult<Converted> {
                 "filter.time_offset.random_walk",
                 t.random_walk.unwrap_or(0.0),
             )?;
-            let initial_rate = finite(
+            // A clock-rate difference of a million ppm (the clocks' rates differ by a
+            // factor of 2) is no time offset any more: bounded, so that writing it
+            // back in ppm stays finite.
+            let ppm = |key: &str, v: f64| -> KResult<f64> {
+                if v.abs() <= MAX_RATE_PPM {
+                    Ok(v)
+                } else {
+                    Err(kerr(
+                        key,
+                        format!("expected at most {MAX_RATE_PPM:e} ppm in magnitude, got {v:e}"),
+                    ))
+                }
+            };
+            let initial_rate = ppm(
                 "filter.time_offset.initial_rate_ppm",
-                t.initial_rate_ppm.unwrap_or(0.0),
+                finite(
+                    "filter.time_offset.initial_rate_ppm",
+                    t.initial_rate_ppm.unwrap_or(0.0),
+                )?,
             )? * 1e-6;
-            let rate_std = non_negative(
+            let rate_std = ppm(
                 "filter.time_offset.rate_std_ppm",
-                t.rate_std_ppm.unwrap_or(0.0),
+                non_negative(
+                    "filter.time_offset.rate_std_ppm",
+                    t.rate_std_ppm.unwrap_or(0.0),
+                )?,
             )? * 1e-6;
             Some(TimeOffsetConfig {
                 initial_s,
@@ -2795,6 +2814,9 @@ fn path_str(p: &Path) -> String {
 
 /// Round to 15 significant digits: hides the last-bit noise of the unit conversions
 /// (0.027 deg/h -> rad/s -> 0.026999999999999996 deg/h) when writing user units.
+/// Largest time-offset rate and rate std accepted [ppm].
+const MAX_RATE_PPM: f64 = 1e6;
+
 fn tidy(x: f64) -> f64 {
     format!("{x:.14e}").parse().unwrap_or(x)
 }
