@@ -268,6 +268,22 @@ pub fn time_offset_prior(std_s: f64) -> Vec<Finding> {
     ))]
 }
 
+/// Mean NIS per row of the fused fix positions above which the fixes and the INS
+/// disagree by far more than either's uncertainty (a tuned MEMS car reaches 8-10).
+const MAX_FIX_NIS_PER_ROW: f64 = 50.0;
+
+/// The fixes fused, but far outside what the filter expected of them: the solution is
+/// a tug of war between the GNSS and a wrongly configured INS.
+pub fn fix_agreement(nis_per_row: f64) -> Vec<Finding> {
+    if !(nis_per_row > MAX_FIX_NIS_PER_ROW) {
+        return Vec::new();
+    }
+    vec![Finding::warning(format!(
+        "the GNSS fixes disagreed with the INS by {:.0} times their expected spread (mean normalised innovation squared per row {nis_per_row:.0}, see summary.json nis_per_row): a lever arm in the wrong unit or sign ([gnss] lever_arm_m, metres, body F R D), a time offset ([gnss] time_offset_s), IMU units or axes ([imu.csv]), or far too small [imu_noise] values?",
+        nis_per_row.sqrt()
+    ))]
+}
+
 /// The GNSS integrity monitor judges GNSS against the dead reckoning: an INS alone
 /// drifts too fast to tell a slow spoofer from its own drift, and then takes the real
 /// signal for the spoofer.
@@ -680,5 +696,12 @@ mod tests {
         assert_eq!(aligned_tilt([-178.0, 2.0, 30.0], false).len(), 1);
         assert!(aligned_tilt([20.0, -10.0, 30.0], false).is_empty());
         assert_eq!(aligned_tilt([50.0, 0.0, 0.0], true).len(), 1);
+    }
+
+    #[test]
+    fn fixes_far_off_the_ins_warn() {
+        assert!(fix_agreement(9.5).is_empty());
+        assert!(fix_agreement(f64::NAN).is_empty());
+        assert!(fix_agreement(163.0)[0].message.contains("lever arm"));
     }
 }

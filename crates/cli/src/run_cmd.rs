@@ -700,6 +700,9 @@ fn navigate(
     if let Some(f) = &job.time_offset {
         found.extend(plausibility::time_offset_fit(f.tau0, f.rate));
     }
+    if let Some((sum, rows)) = job.summary.aiding_nis.get("gnss_position") {
+        found.extend(plausibility::fix_agreement(sum / (*rows).max(1) as f64));
+    }
     let land = cfg.nav.nhc.mode != NhcMode::Off || cfg.nav.odometer.enabled;
     for e in &job.summary.events {
         if let navfuse_core::engine::Event::Aligned { rpy_deg, .. } = e {
