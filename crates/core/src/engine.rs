@@ -623,18 +623,22 @@ impl Navigator {
     /// in dt so the total does not depend on where measurements cut the gap.
     fn propagate_bridged(&mut self, raw: &ImuSample, gap: Option<f64>) {
         if let (Some(_), true) = (gap, raw.dt > 0.0) {
-            self.flush_covariance();
             let f = &self.cfg.filter;
-            let (a, w) = (f.gap_accel_mps2, f.gap_rate);
-            let p = &mut self.filter.p;
-            let t = GAP_MANOEUVRE_S;
-            for k in 0..3 {
-                p[(POS + k, POS + k)] += 0.25 * a * a * t.powi(3) * raw.dt;
-                p[(VEL + k, VEL + k)] += a * a * t * raw.dt;
-                p[(ATT + k, ATT + k)] += w * w * t * raw.dt;
-            }
+            let (a, w, t, dt) = (f.gap_accel_mps2, f.gap_rate, GAP_MANOEUVRE_S, raw.dt);
+            self.widen(POS, Vector3::repeat(0.25 * a * a * t.powi(3) * dt));
+            self.widen(VEL, Vector3::repeat(a * a * t * dt));
+            self.widen(ATT, Vector3::repeat(w * w * t * dt));
         }
         self.propagate(raw);
+    }
+
+    /// Add `var` to the variances of the 3-state block starting at `block` (the
+    /// covariance brought up to date first): what re-admissions and gaps widen.
+    fn widen(&mut self, block: usize, var: Vector3<f64>) {
+        self.flush_covariance();
+        for k in 0..3 {
+            self.filter.p[(block + k, block + k)] += var[k];
+        }
     }
 
     /// Propagate the covariance over the accumulated span (SYSTEM.md §2).
@@ -1022,10 +1026,8 @@ impl Navigator {
             if st.agreed_for(fe.readmit_s) {
                 let y = st.last_innovation();
                 let span = (fix.t - st.since).max(1.0);
-                for k in 0..3 {
-                    self.filter.p[(POS + k, POS + k)] += y[k].powi(2);
-                    self.filter.p[(VEL + k, VEL + k)] += (y[k] / span).powi(2);
-                }
+                self.widen(POS, y.component_mul(&y));
+                self.widen(VEL, (y / span).component_mul(&(y / span)));
                 self.summary.events.push(Event::GnssReadmitted {
                     t: fix.t,
                     streak_s: fix.t - st.since,
@@ -1616,12 +1618,9 @@ impl Navigator {
             // and the velocity's by the drift it was allowed.
             if tr.detector == Detector::Consistency {
                 if let Some(step) = check.step {
-                    self.flush_covariance();
-                    let v = self.cfg.integrity.readmit_drift_mps;
-                    for k in 0..3 {
-                        self.filter.p[(POS + k, POS + k)] += step.innovation_ned_m[k].powi(2);
-                        self.filter.p[(VEL + k, VEL + k)] += v * v;
-                    }
+                    let (y, v) = (step.innovation_ned_m, self.cfg.integrity.readmit_drift_mps);
+                    self.widen(POS, y.component_mul(&y));
+                    self.widen(VEL, Vector3::repeat(v * v));
                 }
             }
         }

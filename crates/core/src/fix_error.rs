@@ -21,6 +21,7 @@
 //!   each other (consecutive innovations change by less than their 3-sigma) for
 //!   `readmit_s`, so a short burst of bad fixes, however consistent, stays out.
 
+use crate::filter::chi2_threshold;
 use nalgebra::Vector3;
 use std::collections::VecDeque;
 
@@ -99,11 +100,9 @@ impl InnovationScale {
     }
 }
 
-/// Median of chi-square with `dof` degrees of freedom (Wilson-Hilferty: 3.4 % high
-/// for 1 dof, 0.6 % for 3, less beyond).
+/// Median of chi-square with `dof` degrees of freedom.
 pub fn chi2_median(dof: usize) -> f64 {
-    let k = dof as f64;
-    k * (1.0 - 2.0 / (9.0 * k)).powi(3)
+    chi2_threshold(dof, 0.5)
 }
 
 /// A run of gate-rejected fixes and whether they agree with each other.
@@ -196,8 +195,8 @@ mod tests {
             b.observe(0.5 * chi2_median(1), 1);
         }
         assert_eq!(b.scale(), 1.0);
-        assert!((chi2_median(3) / 2.366 - 1.0).abs() < 0.007);
-        assert!((chi2_median(1) / 0.4549 - 1.0).abs() < 0.035);
+        assert!((chi2_median(3) / 2.366 - 1.0).abs() < 1e-3);
+        assert!((chi2_median(1) / 0.4549 - 1.0).abs() < 1e-3);
     }
 
     #[test]

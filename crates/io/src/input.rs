@@ -73,6 +73,26 @@ pub struct CsvImuOptions {
     pub accel_unit: AccelUnit,
 }
 
+impl Default for CsvImuOptions {
+    /// `t, gyro x y z, accel x y z` in seconds of GPS week, instantaneous SI rates, no
+    /// header: the configuration defaults (docs/CONFIG.md `[imu.csv]`) with that
+    /// column layout.
+    fn default() -> Self {
+        CsvImuOptions {
+            skip_lines: 0,
+            time_col: 0,
+            gyro_cols: [1, 2, 3],
+            accel_cols: [4, 5, 6],
+            time_unit: TimeUnit::Seconds,
+            time_scale: TimeScale::GpsSecondsOfWeek,
+            quantity: ImuQuantity::Rate,
+            rate_sampling: RateSampling::Instant,
+            gyro_unit: GyroUnit::Rad,
+            accel_unit: AccelUnit::Metre,
+        }
+    }
+}
+
 /// The rtklibexplorer GNSS_IMU raw IMU log: CSV `ax,ay,az [g], gx,gy,gz [deg/s],
 /// counter [ms]` plus an RTKLIB TIMETAG file giving GPST of the log start.
 #[derive(Clone, Debug, PartialEq)]

@@ -104,15 +104,11 @@ fn kfgins_imu(p: &Path) -> Result<(), String> {
 fn csv_imu(p: &Path) -> Result<(), String> {
     let o = CsvImuOptions {
         skip_lines: 2,
-        time_col: 0,
         gyro_cols: [4, 5, 6],
         accel_cols: [1, 2, 3],
-        time_unit: TimeUnit::Seconds,
-        time_scale: TimeScale::GpsSecondsOfWeek,
-        quantity: ImuQuantity::Rate,
-        rate_sampling: RateSampling::Instant,
         gyro_unit: GyroUnit::Deg,
         accel_unit: AccelUnit::G,
+        ..Default::default()
     };
     check_imu(&imu_src(p, ImuFormat::Csv(o), 100.0))
 }

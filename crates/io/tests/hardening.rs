@@ -60,16 +60,10 @@ fn tiny_and_huge_stds_rejected_after_conversion() {
 #[test]
 fn accelerations_overflowing_after_scaling_rejected() {
     let o = CsvImuOptions {
-        skip_lines: 0,
-        time_col: 0,
-        gyro_cols: [1, 2, 3],
-        accel_cols: [4, 5, 6],
-        time_unit: TimeUnit::Seconds,
-        time_scale: TimeScale::GpsSecondsOfWeek,
-        quantity: ImuQuantity::Rate,
         rate_sampling: RateSampling::IntervalMean,
         gyro_unit: GyroUnit::Deg,
         accel_unit: AccelUnit::G,
+        ..Default::default()
     };
     let p = write(
         "g.csv",
