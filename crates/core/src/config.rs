@@ -138,10 +138,11 @@ pub struct FixErrorOptions {
     /// to the disagreement); a shorter burst stays rejected.
     pub readmit_s: f64,
     /// A fix beyond the gate is rejected only when its innovation also exceeds
-    /// 3 std + a dt²/2 (dt since the last fix used; velocity: 3 std + a dt): the
-    /// drift an INS with this acceleration error can plausibly have [m/s²]. Inside
-    /// that bound it is taken with a reduced weight (a MEMS INS in a hard manoeuvre
-    /// is often further off than its covariance says).
+    /// 3 sqrt(scale) std + a dt²/2 (dt since the last trusted fix, at least 1 s;
+    /// velocity: 3 sqrt(scale) std + a dt): the drift an INS with this acceleration
+    /// error can plausibly have [m/s²]. Inside that bound it is taken with a reduced
+    /// weight (a MEMS INS in a hard manoeuvre is often further off than its
+    /// covariance says).
     pub floor_accel_mps2: f64,
 }
 

@@ -1039,9 +1039,11 @@ impl Navigator {
         let lambda = self.fix_pos_scale.scale();
         // What the INS can have drifted since the last fix used: 3 sigma of the fixes
         // plus half the plausible acceleration error over the time since.
-        let since = (fix.t - self.last_gnss_used_t).max(0.0);
+        // High-rate fixes: at least one second's worth (a drift shows over time), and
+        // the fix's 3 sigma at the spread the innovations really have.
+        let since = (fix.t - self.last_gnss_used_t).max(1.0);
         let a = fe.floor_accel_mps2;
-        let floor = 3.0 * f.std_ned.amax() + 0.5 * a * since * since;
+        let floor = 3.0 * lambda.sqrt() * f.std_ned.amax() + 0.5 * a * since * since;
         let (fused, nis, y, weight) =
             self.fuse_fix_row(Aiding::GnssPosition(&f), white, lambda, gate_p, floor);
         if let Some(nis) = nis {
@@ -1071,7 +1073,7 @@ impl Navigator {
         }
         if use_vel && f.vel_ned.is_some() {
             let lambda = self.fix_vel_scale.scale();
-            let floor = 3.0 * f.vel_std_ned.map_or(0.0, |s| s.amax()) + a * since;
+            let floor = 3.0 * lambda.sqrt() * f.vel_std_ned.map_or(0.0, |s| s.amax()) + a * since;
             let (_, nis, _, _) =
                 self.fuse_fix_row(Aiding::GnssVelocity(&f), 1.0, lambda, gate_p, floor);
             if let Some(nis) = nis {

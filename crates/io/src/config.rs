@@ -3319,13 +3319,16 @@ fn toml_error(path: &Path, text: &str, e: &toml::de::Error) -> ConfigError {
     } else {
         toml_key_at(root, span.start, "")
     };
-    let line = if message.starts_with("missing field")
-        && key.as_deref().is_some_and(|k| !k.contains('.'))
-    {
-        None
-    } else {
-        line
-    };
+    let top_level =
+        message.starts_with("missing field") && key.as_deref().is_some_and(|k| !k.contains('.'));
+    if top_level {
+        // A whole section is missing: say so, and where it is described.
+        let section = key.clone().unwrap_or_default();
+        let message = format!(
+            "missing the required section [{section}] (docs/CONFIG.md lists its keys; examples/ has a configuration per dataset)"
+        );
+        return ConfigError::new(path, None, key, message);
+    }
     ConfigError::new(path, line, key, message)
 }
 
