@@ -25,7 +25,7 @@ pub mod static_detect;
 pub mod timeline;
 pub mod types;
 
-pub use engine::{run, Navigator, RunSummary};
+pub use engine::{run, Event, Fused, NavError, Navigator, RunSummary};
 pub use types::{
     merge_measurements, merge_raw_epochs, GnssFix, GnssRawEpoch, HeadingObs, ImuErrors, ImuSample,
     Measurement, NavState, OdometerSample, SatMeasurement,
