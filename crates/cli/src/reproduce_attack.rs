@@ -25,10 +25,10 @@ use std::sync::Mutex;
 
 use anyhow::{anyhow, bail, Context, Result};
 use navfuse_core::config::NhcMode;
-use navfuse_core::engine::Event;
 use navfuse_core::eval::{evaluate, EvalOptions};
 use navfuse_core::integrity::{IntegrityOptions, IntegrityReference, IntegrityState, Transition};
 use navfuse_core::outage::Window;
+use navfuse_core::Event;
 use navfuse_io::config::RunConfig;
 use navfuse_sim::generate::generate;
 use navfuse_sim::gnss_sim::EventSpec;

@@ -705,7 +705,7 @@ fn navigate(
     }
     let land = cfg.nav.nhc.mode != NhcMode::Off || cfg.nav.odometer.enabled;
     for e in &job.summary.events {
-        if let navfuse_core::engine::Event::Aligned { rpy_deg, .. } = e {
+        if let navfuse_core::Event::Aligned { rpy_deg, .. } = e {
             found.extend(plausibility::aligned_tilt(*rpy_deg, land));
         }
     }
@@ -723,7 +723,7 @@ fn navigate(
             .summary
             .events
             .iter()
-            .filter(|e| matches!(e, navfuse_core::engine::Event::Rejected { .. }))
+            .filter(|e| matches!(e, navfuse_core::Event::Rejected { .. }))
             .count();
         if rej > 0 {
             eprintln!(
@@ -862,7 +862,7 @@ fn write_reports(out_dir: &Path, job: &mut JobResult, progress: bool) -> Result<
         let mut t = String::from("t_s,from,to,detector,statistic,threshold\n");
         let mut spoofed = 0;
         for e in &job.summary.events {
-            if let navfuse_core::engine::Event::Integrity(tr) = e {
+            if let navfuse_core::Event::Integrity(tr) = e {
                 spoofed += usize::from(tr.to == navfuse_core::integrity::IntegrityState::Spoofed);
                 t.push_str(&format!(
                     "{:.3},{},{},{},{:.4},{}\n",

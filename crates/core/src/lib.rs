@@ -1,31 +1,38 @@
 //! navfuse-core: the pure navigation core. Earth model, attitude, strapdown
-//! mechanization, error-state EKF and aiding measurement models. No file I/O:
-//! readers and writers live in `navfuse-io`, the command line in `navfuse`.
+//! mechanization, error-state EKF, aiding sources and the navigator. No file I/O:
+//! readers and writers live in `navfuse-io`, the run pipeline in `navfuse-app`.
 //!
 //! Map: `earth` and `attitude` (common math) -> `mechanization` (INS) ->
 //! `error_model` + `filter` + `state` (EKF) -> `aiding/*` (one file per aiding
-//! source) -> `engine` (the navigator and its time loop). `eval` scores solutions.
+//! source: model, policy, state; `aiding::registry` lists them) -> `nav` (the INS
+//! filter, one IMU step, the measurement inbox, the start, the driver). `events`
+//! holds what a run reports; `eval` scores solutions.
 
 pub mod aiding;
 pub mod alignment;
 pub mod attitude;
 pub mod config;
 pub mod earth;
-pub mod engine;
 pub mod error_model;
 pub mod eval;
+pub mod events;
 pub mod filter;
 pub mod fix_error;
 pub mod integrity;
 pub mod mechanization;
+pub mod nav;
 pub mod outage;
 pub mod six_state;
 pub mod state;
 pub mod static_detect;
-pub mod timeline;
 pub mod types;
 
-pub use engine::{run, Event, Fused, NavError, Navigator, RunSummary};
+pub use aiding::source::{AidingSource, Fuser, Handled};
+pub use events::{AidStatus, Event, RunSummary};
+pub use nav::ins_filter::{BlockProcess, BlockSpec, Fused};
+pub use nav::navigator::{NavError, Navigator};
+pub use nav::run::run;
+pub use nav::timeline;
 pub use types::{
     merge_measurements, merge_raw_epochs, GnssFix, GnssRawEpoch, HeadingObs, ImuErrors, ImuSample,
     Measurement, NavState, OdometerSample, SatMeasurement,

@@ -50,3 +50,48 @@ pub fn linearize(ctx: &AidingContext, obs: &HeadingObs, axis: HeadingAxis) -> Op
         r: DMatrix::from_element(1, 1, obs.std_rad.powi(2)),
     })
 }
+
+// ---------------------------------------------------------------------------------
+// Policy: a dual-antenna heading record is fused with its std (or the configured
+// one) and the gate; the course over ground is the loose GNSS source's (gnss_loose.rs).
+
+use super::source::{chi2_gate, AidingSource, Fuser, Handled};
+use super::Aiding;
+use crate::config::{HeadingOptions, NavConfig};
+use crate::types::Measurement;
+
+/// Dual-antenna heading as an aiding source (`[heading]` with a baseline).
+pub struct DualAntennaHeading {
+    opt: HeadingOptions,
+    baseline_b: Vector3<f64>,
+}
+
+impl DualAntennaHeading {
+    /// None without a baseline (no dual-antenna heading is fused).
+    pub fn from_config(cfg: &NavConfig) -> Option<Self> {
+        let c = &cfg.heading;
+        c.baseline_b.map(|b| DualAntennaHeading {
+            opt: c.clone(),
+            baseline_b: b,
+        })
+    }
+}
+
+impl AidingSource for DualAntennaHeading {
+    fn name(&self) -> &'static str {
+        "dual_antenna_heading"
+    }
+
+    fn on_measurement(&mut self, m: &Measurement, f: &mut Fuser) -> Handled {
+        let Measurement::Heading(h) = m else {
+            return Handled::No;
+        };
+        let mut obs = *h;
+        if let Some(s) = self.opt.dual_antenna_std_override {
+            obs.std_rad = s;
+        }
+        let g = chi2_gate(1, self.opt.gate_probability);
+        f.fuse(Aiding::Heading(&obs, HeadingAxis::Body(self.baseline_b)), g);
+        Handled::Yes
+    }
+}

@@ -1,19 +1,29 @@
-//! Aiding sources. Each file holds one source's measurement, Jacobian and noise
-//! (`linearize`); this module is the single registration point: add a variant to
-//! [`Aiding`] and a line to [`Aiding::name`] and [`Aiding::linearize`].
-//! `vehicle_frame.rs` is shared kinematics (the vehicle reference point's velocity)
-//! for the NHC and the odometer.
+//! Aiding sources. `source.rs` is the seam (the `AidingSource` trait and the
+//! `Fuser` handed to it), `registry.rs` THE list of sources. Each source's file holds
+//! its measurement model, its policy and its state: `gnss_loose`, `gnss_six_state`,
+//! `tight`, `zupt`, `nhc`, `odometer`, `heading`; `gnss_integrity` is the spoofing
+//! monitor the GNSS sources share. The pure models the GNSS sources use are
+//! `gnss_position`, `gnss_velocity`, `pseudorange`, `doppler`, `tdcp`;
+//! `vehicle_frame` is shared kinematics (the vehicle reference point's velocity) for
+//! the NHC and the odometer. [`Aiding`] names the built-in models; a source of your
+//! own linearises itself and fuses with `Fuser::fuse_rows`.
 
 pub mod doppler;
+pub mod gnss_integrity;
+pub mod gnss_loose;
 pub mod gnss_position;
+pub mod gnss_six_state;
 pub mod gnss_velocity;
 pub mod heading;
 pub mod nhc;
 pub mod odometer;
 pub mod pseudorange;
+pub mod registry;
+pub mod source;
 pub mod tdcp;
+pub mod tight;
 pub mod vehicle_frame;
-pub mod zero_velocity;
+pub mod zupt;
 
 use crate::state::StateLayout;
 use crate::types::{GnssFix, HeadingObs, NavState, SatMeasurement};
@@ -112,6 +122,20 @@ impl Aiding<'_> {
         }
     }
 
+    /// Whether a rejection by the gate is also logged as an event (the external
+    /// measurements and the standstill updates; not the constraints and the
+    /// per-satellite rows, which are many).
+    pub fn logs_rejections(&self) -> bool {
+        matches!(
+            self,
+            Aiding::GnssPosition(_)
+                | Aiding::GnssVelocity(_)
+                | Aiding::Heading(..)
+                | Aiding::Zupt(_)
+                | Aiding::Zaru(..)
+        )
+    }
+
     /// The measurement model; None when the measurement has nothing to offer
     /// (e.g. a fix without velocity).
     pub fn linearize(&self, ctx: &AidingContext) -> Option<Linearized> {
@@ -128,8 +152,8 @@ impl Aiding<'_> {
             } => Some(odometer::linearize(
                 ctx, *speed_mps, *std_mps, *nhc_std, *calibrate,
             )),
-            Aiding::Zupt(std) => Some(zero_velocity::linearize_zupt(ctx, *std)),
-            Aiding::Zaru(w, std) => Some(zero_velocity::linearize_zaru(ctx, w, *std)),
+            Aiding::Zupt(std) => Some(zupt::linearize_zupt(ctx, *std)),
+            Aiding::Zaru(w, std) => Some(zupt::linearize_zaru(ctx, w, *std)),
             Aiding::Pseudorange(sat) => pseudorange::linearize(ctx, sat),
             Aiding::Doppler(sat) => doppler::linearize(ctx, sat),
             Aiding::Tdcp(sat, prev, iv) => tdcp::linearize(ctx, sat, prev, iv),

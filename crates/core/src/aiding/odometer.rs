@@ -44,3 +44,54 @@ pub fn linearize(
     }
     Linearized { y, h, r }
 }
+
+// ---------------------------------------------------------------------------------
+// Policy: every odometer record is fused with its speed-dependent std and gate; the
+// scale and mounting are calibrated only when both the odometer and the INS move.
+
+use super::source::{chi2_gate, AidingSource, Fuser, Handled};
+use super::Aiding;
+use crate::config::{NavConfig, NhcMode, OdometerOptions};
+use crate::types::Measurement;
+
+/// The odometer as an aiding source (`[odometer]`).
+pub struct OdometerSource {
+    opt: OdometerOptions,
+    /// Seed 004's three-row form: the NHC rows with the odometer (when no separate
+    /// NHC runs), lateral and vertical std [m/s].
+    nhc_std: Option<[f64; 2]>,
+}
+
+impl OdometerSource {
+    /// None when the odometer is not used.
+    pub fn from_config(cfg: &NavConfig) -> Option<Self> {
+        let c = &cfg.odometer;
+        c.enabled.then(|| OdometerSource {
+            opt: c.clone(),
+            nhc_std: (c.with_nhc && cfg.nhc.mode == NhcMode::Off).then_some(cfg.nhc.std_mps),
+        })
+    }
+}
+
+impl AidingSource for OdometerSource {
+    fn name(&self) -> &'static str {
+        "odometer"
+    }
+
+    fn on_measurement(&mut self, m: &Measurement, f: &mut Fuser) -> Handled {
+        let Measurement::Odometer(o) = m else {
+            return Handled::No;
+        };
+        let c = &self.opt;
+        let rows = if self.nhc_std.is_some() { 3 } else { 1 };
+        let v_min = c.calibration_min_speed_mps;
+        let aiding = Aiding::Odometer {
+            speed_mps: o.speed_mps,
+            std_mps: c.std_mps.hypot(c.std_speed_fraction * o.speed_mps),
+            nhc_std: self.nhc_std,
+            calibrate: o.speed_mps.abs() >= v_min && f.nav().v_n.norm() >= v_min,
+        };
+        f.fuse(aiding, chi2_gate(rows, c.gate_probability));
+        Handled::Yes
+    }
+}

@@ -1,0 +1,361 @@
+//! The seam between the navigator and its aiding sources.
+//!
+//! An aiding source holds its measurement model, its policy (when it is due, gates,
+//! timeouts, vetoes, counters, events) and its state, and declares the extra
+//! error-state blocks it owns. The navigator hands it each measurement and, after
+//! every IMU step, the chance to fuse cadence-driven constraints; the source fuses
+//! through a [`Fuser`], which applies the update, feeds the correction back, and
+//! keeps the source's uniform [`AidStatus`] (as PX4 EKF2's aid sources do).
+//! `registry.rs` lists the sources.
+
+use crate::aiding::{Aiding, AidingContext, Linearized, ReceiverClock, VehicleEstimate};
+use crate::events::{AidStatus, Event, RunSummary};
+use crate::filter::UpdateOutcome;
+use crate::integrity::IntegrityState;
+use crate::nav::ins_filter::{BlockProcess, BlockSpec, Fused, InsFilter};
+use crate::six_state::SixState;
+use crate::state::{Block, StateLayout};
+use crate::types::{ImuErrors, ImuSample, Measurement, NavState};
+use nalgebra::{DMatrix, DVector, Vector3};
+
+/// Whether a source took a measurement.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Handled {
+    Yes,
+    No,
+}
+
+/// Facts the sources tell each other.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Shared {
+    /// Time of the last GNSS epoch used (GNSS time) [s]: the NHC's outage mode and
+    /// the loose drift floor read it.
+    pub last_gnss_used_t: f64,
+    /// The static detector sees the vehicle at rest (ZUPT): no NHC meanwhile.
+    pub is_static: bool,
+}
+
+/// One aiding source: model, policy and state (see the module doc).
+pub trait AidingSource: Send {
+    /// Short name for logs and statuses.
+    fn name(&self) -> &'static str;
+
+    /// Extra error-state blocks this source owns (appended in registry order).
+    fn blocks(&self) -> Vec<BlockSpec> {
+        Vec::new()
+    }
+
+    /// The source needs the INS displacement between its epochs
+    /// ([`Fuser::displacement_ecef_m`]; TDCP).
+    fn tracks_displacement(&self) -> bool {
+        false
+    }
+
+    /// A measurement has come due; fuse it (or not). Every source sees every
+    /// measurement: several may react to one (the ZUPT watches the odometer).
+    fn on_measurement(&mut self, _m: &Measurement, _f: &mut Fuser) -> Handled {
+        Handled::No
+    }
+
+    /// A piece of an IMU interval was integrated (`imu`: compensated increments).
+    fn on_propagate(&mut self, _imu: &ImuSample, _f: &mut Fuser) {}
+
+    /// The next IMU interval is a gap the reader bridged.
+    fn on_imu_gap(&mut self) {}
+
+    /// After each IMU sample: cadence-driven constraints (ZUPT, NHC).
+    fn after_imu(&mut self, _f: &mut Fuser) {}
+
+    /// The GNSS integrity state, for a source that monitors it.
+    fn integrity_state(&self) -> Option<IntegrityState> {
+        None
+    }
+
+    /// End of the run: report final estimates into the summary.
+    fn finish(&self, _f: &Fuser, _summary: &mut RunSummary) {}
+}
+
+/// What a source may do to the filter while it is called.
+pub struct Fuser<'a> {
+    pub(crate) ins: &'a mut InsFilter,
+    pub(crate) record: &'a mut RunSummary,
+    pub(crate) shared: &'a mut Shared,
+    pub(crate) status: &'a mut AidStatus,
+}
+
+impl Fuser<'_> {
+    /// The navigation state (the dead reckoning's under six-state fusion).
+    pub fn nav(&self) -> &NavState {
+        &self.ins.nav
+    }
+
+    /// Time of the current state on the GNSS time scale [s].
+    pub fn time_gnss(&self) -> f64 {
+        self.ins.time_gnss()
+    }
+
+    pub fn layout(&self) -> &StateLayout {
+        &self.ins.layout
+    }
+
+    /// Error covariance (as of the last flush).
+    pub fn covariance(&self) -> &DMatrix<f64> {
+        &self.ins.filter.p
+    }
+
+    /// 1-sigma of state `i` (as of the last flush).
+    pub fn std(&self, i: usize) -> f64 {
+        self.ins.filter.std(i)
+    }
+
+    /// 1-sigma of the velocity, NED [m/s].
+    pub fn vel_std_ned_mps(&self) -> Vector3<f64> {
+        self.ins.vel_std_ned_mps()
+    }
+
+    /// Compensated angular rate over the last IMU interval [rad/s].
+    pub fn w_ib_b(&self) -> Vector3<f64> {
+        self.ins.w_ib_b
+    }
+
+    pub fn imu_errors(&self) -> &ImuErrors {
+        &self.ins.imu_errors
+    }
+
+    pub fn vehicle(&self) -> &VehicleEstimate {
+        &self.ins.vehicle
+    }
+
+    /// Sum of the mechanization's own velocity increments (no feedback), NED [m/s].
+    pub fn mech_dv_n(&self) -> Vector3<f64> {
+        self.ins.mech_dv_n
+    }
+
+    /// Number of feedbacks so far (a change means the INS position jumped).
+    pub fn corrections(&self) -> u64 {
+        self.ins.corrections
+    }
+
+    /// The mechanization's own displacement since the last restart (feedback jumps
+    /// excluded), ECEF [m]; zero unless a source tracks it.
+    pub fn displacement_ecef_m(&self) -> Vector3<f64> {
+        self.ins.displacement_ecef_m()
+    }
+
+    /// Start the displacement anew from the current position.
+    pub fn restart_displacement(&mut self) {
+        self.ins.restart_displacement();
+    }
+
+    pub fn shared(&mut self) -> &mut Shared {
+        self.shared
+    }
+
+    pub fn shared_ref(&self) -> &Shared {
+        self.shared
+    }
+
+    /// The run's record: counters and events.
+    pub fn record(&mut self) -> &mut RunSummary {
+        self.record
+    }
+
+    pub fn push_event(&mut self, e: Event) {
+        self.record.events.push(e);
+    }
+
+    /// What the aiding models see, with receiver clock `clock`.
+    pub fn context(&self, clock: ReceiverClock) -> AidingContext<'_> {
+        self.ins.context(clock)
+    }
+
+    /// Bring the covariance up to the current time.
+    pub fn flush_covariance(&mut self) {
+        self.ins.flush_covariance();
+    }
+
+    /// Add `var` to the variances of the 3-state block starting at index `block`.
+    pub fn widen(&mut self, block: usize, var: Vector3<f64>) {
+        self.ins.widen(block, var);
+    }
+
+    /// Add `var` to the variance of state `i` (covariance flushed by the caller).
+    pub fn add_variance(&mut self, i: usize, var: f64) {
+        self.ins.filter.p[(i, i)] += var;
+    }
+
+    /// Reset state `i`: uncorrelated, with variance `var`.
+    pub fn reset_state(&mut self, i: usize, var: f64) {
+        self.ins.filter.reset_state(i, var);
+    }
+
+    /// Nominal values of a source block (empty when the layout lacks it).
+    pub fn extra(&self, block: Block) -> &[f64] {
+        self.ins.extra(block)
+    }
+
+    pub fn extra_mut(&mut self, block: Block) -> &mut [f64] {
+        self.ins.extra_mut(block)
+    }
+
+    /// Change the process model of a source block.
+    pub fn set_process(&mut self, block: Block, process: BlockProcess) {
+        self.ins.set_process(block, process);
+    }
+
+    /// Normalised innovation squared of `lin` against the current covariance.
+    pub fn nis(&self, lin: &Linearized) -> Option<f64> {
+        self.ins.filter.nis(&lin.y, &lin.h, &lin.r)
+    }
+
+    /// Baarda's w-test of stacked rows (filter.rs): (w, blunder) per row.
+    pub fn blunder_test(&self, lin: &Linearized) -> Option<Vec<(f64, f64)>> {
+        self.ins.filter.blunder_test(&lin.y, &lin.h, &lin.r)
+    }
+
+    /// Fuse one of the built-in measurements with an optional chi-square gate.
+    pub fn fuse(&mut self, aiding: Aiding, gate: Option<f64>) -> Fused {
+        self.fuse_with_clock(aiding, gate, ReceiverClock::default())
+    }
+
+    /// [`Fuser::fuse`] with the receiver clock the GNSS models need.
+    pub fn fuse_with_clock(
+        &mut self,
+        aiding: Aiding,
+        gate: Option<f64>,
+        clock: ReceiverClock,
+    ) -> Fused {
+        self.flush_covariance();
+        let Some(lin) = aiding.linearize(&self.context(clock)) else {
+            return Fused::NotApplicable;
+        };
+        self.fuse_linearized(&aiding, &lin, gate, None)
+    }
+
+    /// Fuse an already linearised built-in measurement (covariance flushed).
+    /// `nis_stat`: the NIS to record for a down-weighted row (that of the reported R).
+    pub fn fuse_linearized(
+        &mut self,
+        aiding: &Aiding,
+        lin: &Linearized,
+        gate: Option<f64>,
+        nis_stat: Option<f64>,
+    ) -> Fused {
+        let logged = aiding.logs_rejections();
+        self.fuse_named(aiding.name(), logged, lin, gate, nis_stat)
+    }
+
+    /// Fuse rows of a source's own model under `name` (a custom source's entry
+    /// point); `log_rejections`: a rejection is also an [`Event::Rejected`].
+    pub fn fuse_rows(
+        &mut self,
+        name: &'static str,
+        lin: &Linearized,
+        gate: Option<f64>,
+        log_rejections: bool,
+    ) -> Fused {
+        self.flush_covariance();
+        self.fuse_named(name, log_rejections, lin, gate, None)
+    }
+
+    fn fuse_named(
+        &mut self,
+        name: &'static str,
+        logged: bool,
+        lin: &Linearized,
+        gate: Option<f64>,
+        nis_stat: Option<f64>,
+    ) -> Fused {
+        let t = self.time_gnss();
+        let st = &mut *self.status;
+        st.innovation.clear();
+        st.innovation.extend(lin.y.iter());
+        match self.ins.update(lin, gate) {
+            UpdateOutcome::Applied { dx, nis } => {
+                let nis = nis_stat.unwrap_or(nis);
+                let e = self.record.aiding_nis.entry(name).or_default();
+                *e = (e.0 + nis, e.1 + lin.y.len());
+                *self.record.aiding_used.entry(name).or_default() += 1;
+                st.fused += 1;
+                st.nis = Some(nis);
+                st.test_ratio = gate.map(|g| nis / g);
+                st.last_fused = true;
+                st.last_fused_t = Some(t);
+                Fused::Applied(dx)
+            }
+            UpdateOutcome::Rejected { nis, threshold } => {
+                *self.record.aiding_rejected.entry(name).or_default() += 1;
+                st.rejected += 1;
+                st.nis = Some(nis);
+                st.test_ratio = Some(nis / threshold);
+                st.last_fused = false;
+                if logged {
+                    self.record.events.push(Event::Rejected {
+                        t,
+                        source: name,
+                        nis,
+                        threshold,
+                    });
+                }
+                Fused::Rejected
+            }
+            UpdateOutcome::Singular => {
+                *self.record.aiding_rejected.entry(name).or_default() += 1;
+                st.rejected += 1;
+                st.nis = None;
+                st.test_ratio = None;
+                st.last_fused = false;
+                self.record.events.push(Event::Singular { t, source: name });
+                Fused::Singular
+            }
+        }
+    }
+
+    /// A row dropped by a joint test (data snooping) counts as rejected.
+    pub fn count_rejected(&mut self, name: &'static str) {
+        *self.record.aiding_rejected.entry(name).or_default() += 1;
+        self.status.rejected += 1;
+    }
+
+    /// `GnssFusion::SixState`: the six-state filter, when it runs.
+    pub(crate) fn six_state(&mut self) -> Option<&mut SixState> {
+        self.ins.six_state.as_mut()
+    }
+
+    /// `GnssFusion::SixState`: move it with the dead reckoning and refresh the output.
+    pub(crate) fn six_state_follow_dr(&mut self) {
+        self.ins.six_state_follow_dr();
+    }
+
+    /// `GnssFusion::SixState`: refresh the output solution after a six-state update.
+    pub(crate) fn six_state_refresh(&mut self) {
+        if let Some(six) = &self.ins.six_state {
+            self.ins.six_state_out = six.solution(&self.ins.nav);
+        }
+    }
+}
+
+/// Chi-square gate for `dof` rows at tail probability `p`.
+pub fn chi2_gate(dof: usize, p: Option<f64>) -> Option<f64> {
+    p.map(|p| crate::filter::chi2_threshold(dof, p))
+}
+
+/// Measurements stacked into one (rows in order, block-diagonal R); None if empty.
+pub fn stack_rows(lins: &[&Linearized], n_states: usize) -> Option<Linearized> {
+    let m: usize = lins.iter().map(|l| l.y.len()).sum();
+    if m == 0 {
+        return None;
+    }
+    let mut y = DVector::zeros(m);
+    let mut h = DMatrix::zeros(m, n_states);
+    let mut r = DMatrix::zeros(m, m);
+    let mut k = 0;
+    for l in lins {
+        let d = l.y.len();
+        y.rows_mut(k, d).copy_from(&l.y);
+        h.rows_mut(k, d).copy_from(&l.h);
+        r.view_mut((k, k), (d, d)).copy_from(&l.r);
+        k += d;
+    }
+    Some(Linearized { y, h, r })
+}

@@ -1,0 +1,516 @@
+//! Tightly coupled GNSS (REFERENCES [SYS] §3b; seed 000): one receiver epoch of
+//! per-satellite pseudoranges with Doppler or time-differenced carrier phase, the
+//! receiver clock bias and drift as filter states (models in pseudorange.rs,
+//! doppler.rs, tdcp.rs).
+//!
+//! Policy: the clock bias is (re)set from the pseudoranges when needed; range rates
+//! are fused before the pseudoranges (TDCP compares the carrier with the INS
+//! displacement since the previous epoch, which must still match the state); each
+//! kind is tested jointly per satellite (data snooping) and fused as scalar updates.
+//! After `gate_timeout_s` without a pseudorange used, the single point fix pulls the
+//! solution back first and the carriers restart (Doppler stands in meanwhile).
+
+use super::gnss_integrity::GnssGuard;
+use super::source::{chi2_gate, stack_rows, AidingSource, Fuser, Handled};
+use super::tdcp::{Interval, TdcpPrevious};
+use super::{Aiding, Linearized, ReceiverClock};
+use crate::config::{NavConfig, RangeRate, TightOptions};
+use crate::earth::c_ne;
+use crate::events::{Event, RunSummary};
+use crate::integrity::IntegrityState;
+use crate::nav::ins_filter::{BlockProcess, BlockSpec, Fused};
+use crate::state::{Block, POS, VEL};
+use crate::types::{GnssFix, GnssRawEpoch, ImuSample, Measurement, SatMeasurement};
+use nalgebra::Vector3;
+
+/// After a return from a GNSS gap (or a carrier disagreement), TDCP waits this long
+/// [s] for the pseudoranges and Doppler to correct the INS velocity.
+const CARRIER_WARMUP_S: f64 = 5.0;
+
+/// Tight coupling as an aiding source (`[gnss] coupling = "tight"`).
+pub struct TightGnss {
+    opt: TightOptions,
+    lever_arm_b: Vector3<f64>,
+    gate_timeout_s: f64,
+    guard: Option<GnssGuard>,
+    clock_set: bool,
+    /// Previous epoch's carrier per PRN (index = PRN).
+    prev: Vec<Option<TdcpPrevious>>,
+    /// Time of the previous raw epoch.
+    prev_t: Option<f64>,
+    /// C_n^e C_b^n l^b at the previous epoch [m].
+    prev_lever_ecef_m: Vector3<f64>,
+    /// Time of the last epoch with a pseudorange fused (None: none yet).
+    last_pr_used_t: Option<f64>,
+    /// TDCP is fused from this time on (after a return from a gap, or an epoch whose
+    /// carriers mostly disagreed with the INS, Doppler stands in until then).
+    carriers_trusted_from: f64,
+}
+
+/// Median of the values (reordered), None when empty.
+fn median(v: &mut [f64]) -> Option<f64> {
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(f64::total_cmp);
+    let m = v.len() / 2;
+    Some(if v.len() % 2 == 1 {
+        v[m]
+    } else {
+        0.5 * (v[m - 1] + v[m])
+    })
+}
+
+impl TightGnss {
+    /// None unless tight coupling is on.
+    pub fn from_config(cfg: &NavConfig) -> Option<Self> {
+        cfg.tight.enabled.then(|| TightGnss {
+            opt: cfg.tight.clone(),
+            lever_arm_b: cfg.gnss.lever_arm_b,
+            gate_timeout_s: cfg.gnss.gate_timeout_s,
+            guard: GnssGuard::from_config(cfg),
+            clock_set: false,
+            prev: vec![None; 256],
+            prev_t: None,
+            prev_lever_ecef_m: Vector3::zeros(),
+            last_pr_used_t: None,
+            carriers_trusted_from: f64::NEG_INFINITY,
+        })
+    }
+
+    fn clock(f: &Fuser) -> ReceiverClock {
+        ReceiverClock {
+            bias_m: f.extra(Block::ClockBias)[0],
+            drift_mps: f.extra(Block::ClockDrift)[0],
+        }
+    }
+
+    /// Fuse with the current clock and remember the correction for the monitor.
+    fn fuse(&mut self, f: &mut Fuser, a: Aiding, gate: Option<f64>) -> Fused {
+        let r = f.fuse_with_clock(a, gate, Self::clock(f));
+        if let Some(g) = self.guard.as_mut() {
+            g.note(&r);
+        }
+        r
+    }
+
+    fn update(&mut self, f: &mut Fuser, epoch: &GnssRawEpoch) {
+        let opt = &self.opt;
+        let gate = chi2_gate(1, opt.gate_probability);
+        // Sigmas: scaled, then floored (the TDCP floor is per interval of dt, shared
+        // by the two epochs' carriers).
+        let dt = self.prev_t.map_or(1.0, |t0| epoch.t - t0);
+        let carrier_floor = opt.range_rate_sigma_floor_mps * dt / std::f64::consts::SQRT_2;
+        let sats: Vec<SatMeasurement> = epoch
+            .sats
+            .iter()
+            .map(|s| SatMeasurement {
+                pseudorange_std_m: (s.pseudorange_std_m * opt.pseudorange_sigma_scale)
+                    .max(opt.pseudorange_sigma_floor_m),
+                range_rate_std_mps: (s.range_rate_std_mps * opt.range_rate_sigma_scale)
+                    .max(opt.range_rate_sigma_floor_mps),
+                carrier_std_m: (s.carrier_std_m * opt.range_rate_sigma_scale).max(carrier_floor),
+                ..*s
+            })
+            .collect();
+        self.check_clock(f, epoch.t, &sats);
+        if let Some(guard) = self.guard.as_mut() {
+            // The epoch as a whole, through its single point fix when it has one: the
+            // fix (and its Doppler velocity) against the prediction, as in loose
+            // coupling, with the fix's own covariance (the joint pseudorange NIS is
+            // inflated by per-satellite biases the filter does not model). With 1-3
+            // satellites, no fix: all pseudoranges jointly (chi-square only).
+            let fix_pos = epoch.fix.as_ref().map(|f| Aiding::GnssPosition(f));
+            let prs: Vec<Aiding> = match epoch.fix.as_ref() {
+                Some(f) if f.vel_ned.is_some() => {
+                    vec![Aiding::GnssPosition(f), Aiding::GnssVelocity(f)]
+                }
+                Some(f) => vec![Aiding::GnssPosition(f)],
+                None => sats
+                    .iter()
+                    .filter(|s| s.pseudorange_m.is_some())
+                    .map(Aiding::Pseudorange)
+                    .collect(),
+            };
+            // The single point fix is noisier than a receiver's filtered fix: the
+            // distance threshold is at least its 3-sigma.
+            let floor = epoch.fix.as_ref().map_or(0.0, |f| 3.0 * f.std_ned.norm());
+            let clock = Self::clock(f);
+            if !guard.check(f, epoch.t, &prs, fix_pos, floor, clock) {
+                // Nothing of this epoch is used; carrier differencing restarts.
+                self.prev_t = None;
+                f.record().gnss_rejected += 1;
+                return;
+            }
+        }
+        // No pseudorange fused for gate_timeout_s (an outage, a long rejection streak,
+        // or dead reckoning while the monitor held GNSS out): the solution may have
+        // drifted beyond the pseudorange gates, and the clock reset would absorb part of
+        // the offset, so the single point fix pulls it back first (as the loose gate
+        // timeout does with a fix) and the clock is set again from there.
+        if let (Some(fix), Some(t0), true) = (
+            epoch.fix.as_ref(),
+            self.last_pr_used_t,
+            self.opt.use_pseudorange,
+        ) {
+            if epoch.t - t0 >= self.gate_timeout_s {
+                self.return_from_gap(f, epoch.t, epoch.t - t0, fix);
+                self.check_clock(f, epoch.t, &sats);
+            }
+        }
+        let mut used = false;
+        // Each kind is tested jointly against the prior (data snooping), so a faulty
+        // satellite is found whatever its place in the list; the rest are fused.
+        let w_max = gate.map(f64::sqrt);
+        let beyond_gate = |_: &Aiding, w: f64, _: f64| w_max.is_some_and(|m| w.abs() > m);
+        let doppler: Vec<Aiding> = sats
+            .iter()
+            .filter(|s| s.range_rate_mps.is_some())
+            .map(Aiding::Doppler)
+            .collect();
+        match self.opt.range_rate {
+            RangeRate::None => {}
+            RangeRate::Doppler => used |= self.fuse_snooped(f, &doppler, beyond_gate, |_, _, _| {}),
+            RangeRate::Tdcp => {
+                let trusted = epoch.t >= self.carriers_trusted_from;
+                match self.fuse_tdcp(f, epoch.t, &sats, trusted) {
+                    Some(u) => used |= u,
+                    // Carriers not trusted (yet): the Doppler, when there is one.
+                    None => used |= self.fuse_snooped(f, &doppler, beyond_gate, |_, _, _| {}),
+                }
+            }
+        }
+        if self.opt.use_pseudorange {
+            let rows: Vec<Aiding> = sats
+                .iter()
+                .filter(|s| s.pseudorange_m.is_some())
+                .map(Aiding::Pseudorange)
+                .collect();
+            if self.fuse_snooped(f, &rows, beyond_gate, |_, _, _| {}) {
+                used = true;
+                self.last_pr_used_t = Some(epoch.t);
+            }
+        }
+        // The next TDCP interval starts from the attitude after all of this epoch's
+        // updates.
+        let nav = f.nav();
+        let c_bn = nav.q_bn.to_rotation_matrix().into_inner();
+        self.prev_lever_ecef_m = c_ne(nav.lla.x, nav.lla.y) * c_bn * self.lever_arm_b;
+        if used {
+            f.record().gnss_used += 1;
+            f.shared().last_gnss_used_t = epoch.t;
+        } else {
+            f.record().gnss_rejected += 1;
+        }
+    }
+
+    /// Back after `gap_s` without a pseudorange used (an outage, a rejection streak,
+    /// dead reckoning under the monitor): the solution may have drifted beyond the
+    /// pseudorange gates and its covariance no longer covers that. The position and
+    /// velocity variances grow by the single point fix's disagreement on the axes
+    /// where the covariance cannot explain it (so the fix and the pseudoranges pass
+    /// their gates, and an attitude the fix cannot correct is not pulled by an
+    /// overconfident correlation), the fix is then fused through the gate (only when
+    /// something was widened: otherwise the pseudoranges carry the same), the clock
+    /// is set again, and carrier differencing restarts with Doppler standing in for
+    /// TDCP meanwhile.
+    fn return_from_gap(&mut self, f: &mut Fuser, t: f64, gap_s: f64, fix: &GnssFix) {
+        f.flush_covariance();
+        let (pos, vel) = {
+            let ctx = f.context(Self::clock(f));
+            (
+                Aiding::GnssPosition(fix).linearize(&ctx),
+                Aiding::GnssVelocity(fix).linearize(&ctx),
+            )
+        };
+        // Widen only the axes whose disagreement the covariance cannot explain (beyond
+        // 3 sigma of the prediction and the fix): an INS that is still better than
+        // the single point fix keeps its weight.
+        let mut widened = false;
+        let mut offset_m = 0.0;
+        for (lin, block) in [(&pos, POS), (&vel, VEL)] {
+            let Some(l) = lin else { continue };
+            let hph = &l.h * f.covariance() * l.h.transpose();
+            for k in 0..3 {
+                let (y2, s2) = (l.y[k].powi(2), hph[(k, k)] + l.r[(k, k)]);
+                if y2 > 9.0 * s2 {
+                    f.add_variance(block + k, y2);
+                    widened = true;
+                }
+            }
+            if block == POS {
+                offset_m = l.y.norm();
+            }
+        }
+        if widened {
+            let gate = chi2_gate(3, Some(1e-4));
+            self.fuse(f, Aiding::GnssPosition(fix), gate);
+            if fix.vel_ned.is_some() {
+                self.fuse(f, Aiding::GnssVelocity(fix), gate);
+            }
+        }
+        f.push_event(Event::TightReturn {
+            t,
+            gap_s,
+            offset_m,
+            widened,
+        });
+        self.clock_set = false;
+        self.prev_t = None;
+        self.carriers_trusted_from = t + CARRIER_WARMUP_S;
+    }
+
+    /// Set the clock bias (and drift) states from the measurements at the first
+    /// epoch, and again when the common pseudorange residual jumps by more than
+    /// `clock_reset_m` (receivers that steer their clock in millisecond steps).
+    fn check_clock(&mut self, f: &mut Fuser, t: f64, sats: &[SatMeasurement]) {
+        let mut bias: Vec<f64> = Vec::new();
+        let mut drift: Vec<f64> = Vec::new();
+        {
+            let ctx = f.context(ReceiverClock::default());
+            let (r_ant, c_ne, _) = super::pseudorange::antenna_ecef(&ctx);
+            let v_ant = c_ne * super::gnss_velocity::antenna_velocity(&ctx);
+            for s in sats {
+                let d = s.sat_pos_ecef_m - r_ant;
+                if let Some(p) = s.pseudorange_m {
+                    bias.push(p - d.norm());
+                }
+                if let Some(rr) = s.range_rate_mps {
+                    drift.push(rr - d.normalize().dot(&(s.sat_vel_ecef_mps - v_ant)));
+                }
+            }
+        }
+        let Some(b) = median(&mut bias) else {
+            return;
+        };
+        let jump = b - Self::clock(f).bias_m;
+        if self.clock_set && jump.abs() <= self.opt.clock_reset_m {
+            return;
+        }
+        let i = f.layout().index(Block::ClockBias).expect("tight layout");
+        f.flush_covariance();
+        // The bias absorbs the antenna position error: its sigma is the position's.
+        let pos_var: f64 = (0..3).map(|k| f.covariance()[(POS + k, POS + k)]).sum();
+        f.reset_state(i, pos_var + 10.0f64.powi(2));
+        f.extra_mut(Block::ClockBias)[0] = b;
+        if !self.clock_set {
+            if let Some(d) = median(&mut drift) {
+                let vel_var: f64 = (0..3).map(|k| f.covariance()[(VEL + k, VEL + k)]).sum();
+                f.reset_state(i + 1, vel_var + 1.0);
+                f.extra_mut(Block::ClockDrift)[0] = d;
+            }
+        }
+        self.clock_set = true;
+        f.push_event(Event::ClockReset { t, jump_m: jump });
+    }
+
+    /// TDCP of the carriers continuous since the previous epoch, with the slip test;
+    /// `None` when not fused (`trusted` false, or the carriers of most satellites
+    /// disagreeing with the INS at once). The epoch's carriers are remembered either
+    /// way.
+    fn fuse_tdcp(
+        &mut self,
+        f: &mut Fuser,
+        t: f64,
+        sats: &[SatMeasurement],
+        trusted: bool,
+    ) -> Option<bool> {
+        let (slip_sigma, slip_min_m) = (self.opt.slip_sigma, self.opt.slip_min_m);
+        let nav = *f.nav();
+        let c_bn = nav.q_bn.to_rotation_matrix().into_inner();
+        let lever_ecef = c_ne(nav.lla.x, nav.lla.y) * c_bn * self.lever_arm_b;
+        let interval = self.prev_t.map(|t0| Interval {
+            antenna_displacement_ecef_m: f.displacement_ecef_m() + lever_ecef
+                - self.prev_lever_ecef_m,
+            dt_s: t - t0,
+        });
+        let mut rows = Vec::new();
+        if let Some(iv) = interval.filter(|iv| iv.dt_s <= self.opt.tdcp_max_gap_s) {
+            for s in sats
+                .iter()
+                .filter(|s| !s.lost_lock && s.carrier_m.is_some())
+            {
+                if let Some(prev) = self.prev[s.prn as usize] {
+                    rows.push(Aiding::Tdcp(s, prev, iv));
+                }
+            }
+        }
+        // Cycle-slip test against the INS prediction, all satellites jointly: a slip is
+        // a carrier jump beyond slip_sigma (w-test) and beyond slip_min_m.
+        let slipped = |a: &Aiding, w: f64, blunder: f64| match a {
+            Aiding::Tdcp(_, _, iv) => {
+                w.abs() > slip_sigma && (blunder * iv.dt_s).abs() > slip_min_m
+            }
+            _ => false,
+        };
+        // Slips are rare and per satellite; most carriers disagreeing at once is the
+        // INS velocity being off (after an outage): not slips, and no TDCP.
+        let flagged = if trusted {
+            Self::count_blunders(f, &rows, slipped)
+        } else {
+            0
+        };
+        let storm = flagged >= 3 && 2 * flagged > rows.len();
+        let used = if !trusted {
+            None
+        } else if storm {
+            f.push_event(Event::CarriersDistrusted {
+                t,
+                flagged,
+                of: rows.len(),
+            });
+            self.carriers_trusted_from = t + CARRIER_WARMUP_S;
+            None
+        } else {
+            let mut slips = Vec::new();
+            let used = self.fuse_snooped(f, &rows, slipped, |a, w, blunder| {
+                if let Aiding::Tdcp(s, _, iv) = a {
+                    slips.push(Event::CycleSlip {
+                        t,
+                        prn: s.prn,
+                        jump_m: blunder * iv.dt_s,
+                        w,
+                    });
+                }
+            });
+            f.record().events.extend(slips);
+            Some(used)
+        };
+        // Remember this epoch (after the updates: the displacement restarts here).
+        for p in self.prev.iter_mut() {
+            *p = None;
+        }
+        for s in sats {
+            if let Some(c) = s.carrier_m {
+                self.prev[s.prn as usize] = Some(TdcpPrevious {
+                    t,
+                    sat_pos_ecef_m: s.sat_pos_ecef_m,
+                    carrier_m: c,
+                    carrier_std_m: s.carrier_std_m,
+                });
+            }
+        }
+        self.prev_t = Some(t);
+        f.restart_displacement();
+        used
+    }
+
+    /// How many of `rows` the joint w-test flags at once (`is_blunder`).
+    fn count_blunders(
+        f: &mut Fuser,
+        rows: &[Aiding],
+        is_blunder: impl Fn(&Aiding, f64, f64) -> bool,
+    ) -> usize {
+        f.flush_covariance();
+        let ctx = f.context(Self::clock(f));
+        let lins: Vec<(Aiding, Linearized)> = rows
+            .iter()
+            .filter_map(|a| a.linearize(&ctx).map(|l| (*a, l)))
+            .collect();
+        let refs: Vec<&Linearized> = lins.iter().map(|(_, l)| l).collect();
+        let Some(stacked) = stack_rows(&refs, ctx.layout.len()) else {
+            return 0;
+        };
+        f.blunder_test(&stacked).map_or(0, |tests| {
+            tests
+                .iter()
+                .zip(&lins)
+                .filter(|((w, b), (a, _))| is_blunder(a, *w, *b))
+                .count()
+        })
+    }
+
+    /// Fuse one-row measurements after data snooping: test them jointly against the
+    /// prior (Baarda's w-test, [`crate::filter::Eskf::blunder_test`]), drop the worst
+    /// while `is_blunder(row, w, blunder)` holds for it (reported through `rejected`
+    /// and counted as rejected), then fuse the rest. True if any was applied.
+    fn fuse_snooped(
+        &mut self,
+        f: &mut Fuser,
+        rows: &[Aiding],
+        is_blunder: impl Fn(&Aiding, f64, f64) -> bool,
+        mut rejected: impl FnMut(&Aiding, f64, f64),
+    ) -> bool {
+        f.flush_covariance();
+        let mut keep: Vec<(Aiding, Linearized)> = {
+            let ctx = f.context(Self::clock(f));
+            rows.iter()
+                .filter_map(|a| a.linearize(&ctx).map(|lin| (*a, lin)))
+                .collect()
+        };
+        while !keep.is_empty() {
+            let lins: Vec<&Linearized> = keep.iter().map(|(_, lin)| lin).collect();
+            let Some(stacked) = stack_rows(&lins, f.layout().len()) else {
+                break;
+            };
+            let Some(tests) = f.blunder_test(&stacked) else {
+                break;
+            };
+            let worst = tests
+                .iter()
+                .enumerate()
+                .filter(|(i, (w, b))| is_blunder(&keep[*i].0, *w, *b))
+                .max_by(|a, b| a.1 .0.abs().total_cmp(&b.1 .0.abs()));
+            let Some((i, &(w, b))) = worst else {
+                break;
+            };
+            let (a, _) = keep.remove(i);
+            rejected(&a, w, b);
+            f.count_rejected(a.name());
+        }
+        let mut used = false;
+        for (a, _) in keep {
+            used |= self.fuse(f, a, None).applied();
+        }
+        used
+    }
+}
+
+impl AidingSource for TightGnss {
+    fn name(&self) -> &'static str {
+        "gnss_tight"
+    }
+
+    fn blocks(&self) -> Vec<BlockSpec> {
+        // The clock states are set from the first epoch's measurements (check_clock).
+        vec![
+            BlockSpec {
+                block: Block::ClockBias,
+                initial_variance: vec![1.0],
+                process: BlockProcess::RandomWalk(self.opt.clock_bias_psd_sqrt.powi(2)),
+            },
+            BlockSpec {
+                block: Block::ClockDrift,
+                initial_variance: vec![self.opt.clock_drift_std0_mps.powi(2)],
+                process: BlockProcess::RandomWalk(self.opt.clock_drift_psd_sqrt.powi(2)),
+            },
+        ]
+    }
+
+    fn tracks_displacement(&self) -> bool {
+        self.opt.range_rate == RangeRate::Tdcp
+    }
+
+    fn on_measurement(&mut self, m: &Measurement, f: &mut Fuser) -> Handled {
+        let Measurement::GnssRaw(epoch) = m else {
+            return Handled::No;
+        };
+        self.update(f, epoch);
+        Handled::Yes
+    }
+
+    /// The clock bias follows its drift.
+    fn on_propagate(&mut self, s: &ImuSample, f: &mut Fuser) {
+        let drift = f.extra(Block::ClockDrift)[0];
+        f.extra_mut(Block::ClockBias)[0] += drift * s.dt;
+    }
+
+    fn integrity_state(&self) -> Option<IntegrityState> {
+        self.guard.as_ref().map(|g| g.state())
+    }
+
+    fn finish(&self, f: &Fuser, summary: &mut RunSummary) {
+        let c = Self::clock(f);
+        summary.receiver_clock = Some((c.bias_m, c.drift_mps));
+    }
+}

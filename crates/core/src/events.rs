@@ -1,0 +1,203 @@
+//! What a run reports: events with their time, the end-of-run summary and the
+//! uniform status each aiding source keeps (innovation, NIS, fused or rejected, time
+//! of the last fusion; as PX4's aid sources do).
+
+use crate::integrity::Transition;
+use nalgebra::Vector3;
+use std::collections::BTreeMap;
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum Event {
+    /// A measurement failed the innovation gate.
+    Rejected {
+        t: f64,
+        source: &'static str,
+        nis: f64,
+        threshold: f64,
+    },
+    /// A measurement's innovation covariance was singular; dropped.
+    Singular { t: f64, source: &'static str },
+    /// An IMU interval of `dt` seconds from `t` (a gap the reader bridged): the INS
+    /// uncertainty was grown by the plausible motion over it.
+    ImuGap { t: f64, dt: f64 },
+    /// Fixes had been rejected for `streak_s` seconds; this one was used ungated.
+    GateBypassed { t: f64, streak_s: f64 },
+    /// Loose coupling: fixes rejected for `streak_s` seconds had agreed with each
+    /// other for `gnss.readmit_s`; the filter widened its uncertainty by their
+    /// disagreement `offset_m` and took this one.
+    GnssReadmitted {
+        t: f64,
+        streak_s: f64,
+        offset_m: f64,
+    },
+    /// Tight coupling: no pseudorange had been fused for `gap_s` seconds (outage,
+    /// rejection streak, or dead reckoning under the integrity monitor); the position
+    /// and velocity uncertainty was widened by the single point fix's disagreement
+    /// `offset_m` where the covariance could not explain it (`widened`; the fix then
+    /// fused through the gate), and the carriers restarted.
+    TightReturn {
+        t: f64,
+        gap_s: f64,
+        offset_m: f64,
+        widened: bool,
+    },
+    /// Tight coupling: the carriers of `flagged` of `of` satellites disagreed with the
+    /// INS at once (its velocity, not cycle slips): TDCP is not fused until they
+    /// agree again; Doppler stands in when the receiver gives it.
+    CarriersDistrusted { t: f64, flagged: usize, of: usize },
+    /// How the initial attitude was found.
+    Aligned {
+        t: f64,
+        method: &'static str,
+        rpy_deg: [f64; 3],
+    },
+    /// The vehicle came to rest / started moving (static detector).
+    Static { t: f64, begins: bool },
+    /// The receiver clock bias state was (re)set from the pseudoranges: at the first
+    /// epoch, or after a clock jump of `jump_m`.
+    ClockReset { t: f64, jump_m: f64 },
+    /// A carrier-phase cycle slip: the carrier jump `jump_m` over the interval
+    /// estimated against the INS and the other satellites, with its w-test statistic
+    /// `w`; the satellite's carrier differencing restarts.
+    CycleSlip {
+        t: f64,
+        prn: u8,
+        jump_m: f64,
+        w: f64,
+    },
+    /// The GNSS integrity monitor changed state (spoofing detection).
+    Integrity(Transition),
+}
+
+impl std::fmt::Display for Event {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Event::Rejected { t, source, nis, threshold } => write!(
+                f,
+                "{t:.3} {source} rejected: normalised innovation squared {nis:.1} > gate {threshold:.1}"
+            ),
+            Event::ImuGap { t, dt } => write!(
+                f,
+                "{t:.3} imu gap of {dt:.3} s bridged: position, velocity and attitude uncertainty grown by the plausible motion ([filter] gap_accel_mps2, gap_rate_dps)"
+            ),
+            Event::Singular { t, source } => {
+                write!(f, "{t:.3} {source} dropped: innovation covariance not positive definite")
+            }
+            Event::GateBypassed { t, streak_s } => write!(
+                f,
+                "{t:.3} gnss fix used without the gate: fixes rejected for {streak_s:.1} s (gate timeout)"
+            ),
+            Event::GnssReadmitted { t, streak_s, offset_m } => write!(
+                f,
+                "{t:.3} gnss fixes re-admitted: rejected for {streak_s:.1} s but consistent with each other; the INS was {offset_m:.2} m away"
+            ),
+            Event::TightReturn {
+                t,
+                gap_s,
+                offset_m,
+                widened,
+            } => write!(
+                f,
+                "{t:.3} gnss back after {gap_s:.1} s without a pseudorange used: the single point fix is {offset_m:.1} m away{}; carriers restarted (Doppler until they are trusted)",
+                if *widened { ", beyond the covariance: uncertainty widened and the fix fused" } else { ", within the covariance" }
+            ),
+            Event::CarriersDistrusted { t, flagged, of } => write!(
+                f,
+                "{t:.3} carriers of {flagged} of {of} satellites disagree with the INS at once (its velocity, not slips): TDCP paused, Doppler used"
+            ),
+            Event::Aligned { t, method, rpy_deg } => write!(
+                f,
+                "{t:.3} aligned ({method}): roll {:.3} pitch {:.3} yaw {:.3} deg",
+                rpy_deg[0], rpy_deg[1], rpy_deg[2]
+            ),
+            Event::ClockReset { t, jump_m } => write!(
+                f,
+                "{t:.3} receiver clock bias set from the pseudoranges (step {jump_m:.1} m)"
+            ),
+            Event::Integrity(tr) => {
+                let th = if tr.threshold.is_finite() {
+                    format!(" > {:.2}", tr.threshold)
+                } else {
+                    String::new()
+                };
+                write!(
+                    f,
+                    "{:.3} GNSS integrity: {} -> {} ({} {:.2}{th})",
+                    tr.t,
+                    tr.from.name(),
+                    tr.to.name(),
+                    tr.detector.name(),
+                    tr.statistic
+                )
+            }
+            Event::CycleSlip { t, prn, jump_m, w } => write!(
+                f,
+                "{t:.3} G{prn:02} cycle slip: carrier jump {jump_m:.3} m against the INS (w-test {w:.1})"
+            ),
+            Event::Static { t, begins } => {
+                if *begins {
+                    write!(f, "{t:.3} static: zero-velocity updates start")
+                } else {
+                    write!(f, "{t:.3} moving: zero-velocity updates stop")
+                }
+            }
+        }
+    }
+}
+
+/// Counts for the end-of-run summary.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RunSummary {
+    pub first_t: f64,
+    pub last_t: f64,
+    pub imu_samples: usize,
+    pub gnss_used: usize,
+    pub gnss_rejected: usize,
+    pub gnss_in_outage: usize,
+    pub gnss_before_start: usize,
+    pub outputs: usize,
+    pub events: Vec<Event>,
+    /// Per aiding source (Aiding::name): updates applied and rejected by their test.
+    pub aiding_used: BTreeMap<&'static str, usize>,
+    pub aiding_rejected: BTreeMap<&'static str, usize>,
+    /// Per aiding source: sums of the normalised innovation squared of the applied
+    /// updates and of their rows (mean NIS per row = 1 for a consistent filter).
+    pub aiding_nis: BTreeMap<&'static str, (f64, usize)>,
+    /// Time spent static according to the detector [s].
+    pub static_s: f64,
+    /// Final GNSS-IMU time offset at `last_t` and its 1-sigma [s], when estimated.
+    pub time_offset: Option<(f64, f64)>,
+    /// Final time-offset rate and its 1-sigma [s/s], when estimated.
+    pub time_offset_rate: Option<(f64, f64)>,
+    /// Final odometer scale k and its 1-sigma, when estimated.
+    pub odometer_scale: Option<(f64, f64)>,
+    /// Final IMU mounting roll, pitch, yaw [rad] and 1-sigma of pitch and yaw, when
+    /// estimated.
+    pub mounting: Option<(Vector3<f64>, [f64; 2])>,
+    /// Final receiver clock bias [m] and drift [m/s], when estimated.
+    pub receiver_clock: Option<(f64, f64)>,
+    /// The uniform status of each aiding source at the end, in registry order.
+    pub aid_status: Vec<AidStatus>,
+}
+
+/// The uniform status of one aiding source, kept by the [`crate::aiding::Fuser`]
+/// for every update the source makes.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct AidStatus {
+    /// The source's name (`AidingSource::name`).
+    pub name: &'static str,
+    /// Updates applied (including down-weighted ones).
+    pub fused: usize,
+    /// Updates rejected by their test (gate, data snooping) or dropped as singular.
+    pub rejected: usize,
+    /// Innovation of the last update tried (its rows), h(x_est) - z.
+    pub innovation: Vec<f64>,
+    /// Normalised innovation squared of the last update tried.
+    pub nis: Option<f64>,
+    /// NIS / gate of the last gated update tried (> 1: rejected).
+    pub test_ratio: Option<f64>,
+    /// Whether the last update tried was applied.
+    pub last_fused: bool,
+    /// Time of the last applied update (GNSS time scale) [s].
+    pub last_fused_t: Option<f64>,
+}

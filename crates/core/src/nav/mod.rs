@@ -1,0 +1,12 @@
+//! The navigator and its time loop: the INS with its error-state filter
+//! (`ins_filter`), one IMU step with its measurements (`navigator`, `timeline`), the
+//! start (`start`) and the driver (`run`).
+
+pub mod ins_filter;
+pub mod navigator;
+pub mod run;
+pub(crate) mod start;
+pub mod timeline;
+
+#[cfg(test)]
+mod tests;
