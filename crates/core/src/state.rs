@@ -1,6 +1,7 @@
-//! Error-state layout. The 21 INS states come first in a fixed order; later aiding
-//! sources append their own blocks (time offset, odometer scale, mounting, receiver
-//! clock) without changing the filter.
+//! Error-state layout. The 21 INS states come first in a fixed order; the INS-level
+//! extra blocks (time offset, odometer scale, mounting) and the aiding sources' own
+//! blocks (receiver clock, fix error, `Block::Source`) follow, without changing the
+//! filter.
 //!
 //! Error conventions: position, velocity, attitude, time offset, receiver clock and
 //! vehicle states are x_est - x_true (position in NED metres, velocity NED [m/s],
@@ -37,6 +38,13 @@ pub enum Block {
     /// Time-correlated error of the loosely coupled GNSS fixes, NED [m]
     /// (fix_error.rs), b_est - b_true.
     GnssBias,
+    /// A block an aiding source defines in its own file (aiding/source.rs): its
+    /// name and number of states. A new source adds its states without touching
+    /// this list.
+    Source {
+        name: &'static str,
+        len: usize,
+    },
 }
 
 impl Block {
@@ -48,6 +56,7 @@ impl Block {
             | Block::ClockBias
             | Block::ClockDrift => 1,
             Block::Mounting => 2,
+            Block::Source { len, .. } => len,
             _ => 3,
         }
     }

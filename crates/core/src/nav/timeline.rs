@@ -211,4 +211,67 @@ mod tests {
         assert!(rest.cut_until(1.0).is_none());
         assert!(rest.take_rest().is_none());
     }
+
+    /// The inbox on its own: GNSS-clock inputs come due at t + offset, the odometer
+    /// (IMU clock) at its own time; a fix inside an outage is withheld, an odometer
+    /// record at the same time is not; nothing is handed over twice.
+    #[test]
+    fn inbox_applies_the_offset_and_withholds_outages() {
+        use crate::outage::Window;
+        use crate::types::{GnssFix, OdometerSample};
+        let fix = |t: f64| GnssFix {
+            t,
+            lla: Vector3::zeros(),
+            std_ned: Vector3::repeat(1.0),
+            vel_ned: None,
+            vel_std_ned: None,
+        };
+        let odo = |t: f64| OdometerSample {
+            t,
+            speed_mps: 1.0,
+            interval_s: 0.0,
+        };
+        let meas = crate::types::merge_measurements(
+            &[fix(1.0), fix(2.0), fix(3.0)],
+            &[odo(1.0), odo(2.0)],
+            &[],
+        );
+        let outages = OutageSchedule {
+            windows: vec![Window {
+                start: 1.5,
+                end: 2.5,
+            }],
+            periodic: Vec::new(),
+        };
+        let mut inbox = Inbox::new(&meas, &outages);
+        let offset = 0.2;
+        // Up to IMU time 1.1: the odometer at 1.0 and the fix at 1.0 + 0.2 is not due.
+        let mut due_at = |t_end: f64, inbox: &mut Inbox| {
+            let mut got = Vec::new();
+            while let Some(d) = inbox.next_due(t_end, offset) {
+                got.push(match d {
+                    Due::Apply { m, t_eff } => (m.on_gnss_clock(), t_eff, true),
+                    Due::Withheld(m) => (m.on_gnss_clock(), m.t(), false),
+                });
+            }
+            got
+        };
+        // Merged order at t = 1: the fix first; it is due at 1.2, so nothing before.
+        assert!(due_at(1.1, &mut inbox).is_empty());
+        assert_eq!(
+            due_at(1.2, &mut inbox),
+            vec![(true, 1.2, true), (false, 1.0, true)]
+        );
+        // The fix at 2.0 is inside the outage: withheld; the odometer at 2.0 is not.
+        assert_eq!(
+            due_at(2.2, &mut inbox),
+            vec![(true, 2.0, false), (false, 2.0, true)]
+        );
+        assert_eq!(due_at(10.0, &mut inbox), vec![(true, 3.2, true)]);
+        assert!(due_at(10.0, &mut inbox).is_empty());
+        // skip_while drops the leading inputs only.
+        let mut inbox = Inbox::new(&meas, &outages);
+        assert_eq!(inbox.skip_while(|m| m.t() <= 1.0).len(), 2);
+        assert!(matches!(inbox.next_due(10.0, 0.0), Some(Due::Withheld(_))));
+    }
 }
