@@ -7,7 +7,7 @@ use crate::attitude::c_bn_from_euler;
 use crate::types::{GnssFix, ImuSample};
 use nalgebra::{Matrix3, Vector3};
 
-/// Roll and pitch [rad] from the mean specific force in the body frame while static:
+/// Roll and pitch \[rad\] from the mean specific force in the body frame while static:
 /// f^b = C_n^b (0, 0, -g), so roll = atan2(-f_y, -f_z), pitch = atan2(f_x, |f_yz|).
 pub fn level(mean_f_b: &Vector3<f64>) -> (f64, f64) {
     let roll = (-mean_f_b.y).atan2(-mean_f_b.z);
@@ -17,7 +17,7 @@ pub fn level(mean_f_b: &Vector3<f64>) -> (f64, f64) {
     (roll, pitch)
 }
 
-/// Mean specific force [m/s²] and mean angular rate [rad/s] of a sample window.
+/// Mean specific force \[m/s²\] and mean angular rate \[rad/s\] of a sample window.
 pub fn mean_motion(samples: &[ImuSample]) -> Option<(Vector3<f64>, Vector3<f64>)> {
     let t: f64 = samples.iter().map(|s| s.dt).sum();
     if t <= 0.0 {
@@ -28,7 +28,7 @@ pub fn mean_motion(samples: &[ImuSample]) -> Option<(Vector3<f64>, Vector3<f64>)
     Some((dv / t, dth / t))
 }
 
-/// Course over ground [rad, from north] of the first fix at or after `t_from` whose
+/// Course over ground \[rad, from north\] of the first fix at or after `t_from` whose
 /// horizontal speed is at least `min_speed` m/s: from the fix velocity when present,
 /// otherwise from the displacement to the next fix (seed 001 eq. 11).
 pub fn first_course(fixes: &[GnssFix], t_from: f64, min_speed: f64) -> Option<(f64, f64)> {
@@ -48,7 +48,7 @@ pub fn first_course(fixes: &[GnssFix], t_from: f64, min_speed: f64) -> Option<(f
     None
 }
 
-/// Gyrocompassing (static): yaw [rad] from the mean angular rate [rad/s] and the
+/// Gyrocompassing (static): yaw \[rad\] from the mean angular rate \[rad/s\] and the
 /// levelled roll and pitch. In the local level frame Earth rate is
 /// (W cos(lat) cos(yaw), -W cos(lat) sin(yaw), .), so yaw = atan2(-w_l,y, w_l,x).
 pub fn gyrocompass_yaw(mean_w_b: &Vector3<f64>, roll: f64, pitch: f64) -> f64 {
@@ -58,8 +58,8 @@ pub fn gyrocompass_yaw(mean_w_b: &Vector3<f64>, roll: f64, pitch: f64) -> f64 {
 }
 
 /// In-motion coarse attitude (C_b^n) from the vehicle course over ground `course`
-/// [rad], the mean body specific force `mean_f_b` [m/s²] and the NED acceleration
-/// `a_n` [m/s²] over the same span (from GNSS velocities), gravity `g` [m/s²], and
+/// \[rad\], the mean body specific force `mean_f_b` \[m/s²\] and the NED acceleration
+/// `a_n` \[m/s²\] over the same span (from GNSS velocities), gravity `g` \[m/s²\], and
 /// the IMU mounting C_b^m. Vehicle roll and pitch solve C_n^m (a^n - g^n) = C_b^m f^b
 /// by levelling on the acceleration-corrected specific force (fixed point; the
 /// acceleration is small next to g), yaw of the vehicle = course.

@@ -27,7 +27,7 @@ pub fn quat_from_rotvec(rv: &Vector3<f64>) -> UnitQuaternion<f64> {
     }
 }
 
-/// C_b^n from (roll, pitch, yaw) [rad], ZYX convention.
+/// C_b^n from (roll, pitch, yaw) \[rad\], ZYX convention.
 pub fn c_bn_from_euler(rpy: &Vector3<f64>) -> Matrix3<f64> {
     let (sr, cr) = rpy.x.sin_cos();
     let (sp, cp) = rpy.y.sin_cos();
@@ -45,7 +45,7 @@ pub fn c_bn_from_euler(rpy: &Vector3<f64>) -> Matrix3<f64> {
     )
 }
 
-/// (roll, pitch, yaw) [rad] from C_b^n; yaw in (-pi, pi].
+/// (roll, pitch, yaw) \[rad\] from C_b^n; yaw in (-pi, pi].
 pub fn euler_from_c_bn(c: &Matrix3<f64>) -> Vector3<f64> {
     let pitch = (-c[(2, 0)]).clamp(-1.0, 1.0).asin();
     let roll = c[(2, 1)].atan2(c[(2, 2)]);
@@ -53,12 +53,12 @@ pub fn euler_from_c_bn(c: &Matrix3<f64>) -> Vector3<f64> {
     Vector3::new(roll, pitch, yaw)
 }
 
-/// Quaternion q_bn from (roll, pitch, yaw) [rad].
+/// Quaternion q_bn from (roll, pitch, yaw) \[rad\].
 pub fn q_bn_from_euler(rpy: &Vector3<f64>) -> UnitQuaternion<f64> {
     UnitQuaternion::from_euler_angles(rpy.x, rpy.y, rpy.z)
 }
 
-/// (roll, pitch, yaw) [rad] of quaternion q_bn.
+/// (roll, pitch, yaw) \[rad\] of quaternion q_bn.
 pub fn euler_from_q_bn(q: &UnitQuaternion<f64>) -> Vector3<f64> {
     euler_from_c_bn(q.to_rotation_matrix().matrix())
 }

@@ -6,16 +6,16 @@
 
 use nalgebra::{Matrix3, Vector3};
 
-/// WGS-84 semi-major axis [m].
+/// WGS-84 semi-major axis \[m\].
 pub const WGS84_A: f64 = 6_378_137.0;
 /// WGS-84 flattening.
 pub const WGS84_F: f64 = 1.0 / 298.257_223_563;
 /// WGS-84 first eccentricity squared.
 pub const WGS84_E2: f64 = WGS84_F * (2.0 - WGS84_F);
-/// Earth rotation rate [rad/s] (WGS-84, IS-GPS-200 value).
+/// Earth rotation rate \[rad/s\] (WGS-84, IS-GPS-200 value).
 pub const OMEGA_IE: f64 = 7.292_115_146_7e-5;
 
-/// Meridian radius M and prime-vertical radius N [m] at geodetic latitude `lat_rad`.
+/// Meridian radius M and prime-vertical radius N \[m\] at geodetic latitude `lat_rad`.
 /// SYSTEM.md §1: N = a / sqrt(1 - e² sin²φ), M = a (1 - e²) / (1 - e² sin²φ)^(3/2).
 #[inline]
 pub fn radii(lat_rad: f64) -> (f64, f64) {
@@ -27,7 +27,7 @@ pub fn radii(lat_rad: f64) -> (f64, f64) {
     (m, n)
 }
 
-/// Normal gravity magnitude [m/s²] at latitude and ellipsoidal height.
+/// Normal gravity magnitude \[m/s²\] at latitude and ellipsoidal height.
 /// SYSTEM.md §1; seed 000 eq. 9-10 (a1 with the standard value 9.7803267715).
 #[inline]
 pub fn gravity_normal(lat_rad: f64, h_m: f64) -> f64 {
@@ -47,13 +47,13 @@ pub fn gravity_normal_sc(sin_lat: f64, h_m: f64) -> f64 {
     A1 * (1.0 + A2 * s2 + A3 * s2 * s2) + (A4 + A5 * s2) * h_m + A6 * h_m * h_m
 }
 
-/// Earth rotation rate resolved in NED, omega_ie^n [rad/s].
+/// Earth rotation rate resolved in NED, omega_ie^n \[rad/s\].
 #[inline]
 pub fn omega_ie_n(lat_rad: f64) -> Vector3<f64> {
     Vector3::new(OMEGA_IE * lat_rad.cos(), 0.0, -OMEGA_IE * lat_rad.sin())
 }
 
-/// Transport rate omega_en^n [rad/s] for NED velocity `v_n`. SYSTEM.md §1.
+/// Transport rate omega_en^n \[rad/s\] for NED velocity `v_n`. SYSTEM.md §1.
 #[inline]
 pub fn omega_en_n(lat_rad: f64, h_m: f64, v_n: &Vector3<f64>) -> Vector3<f64> {
     let (m, n) = radii(lat_rad);
@@ -71,7 +71,7 @@ pub fn ned_to_dlla_scale(lat_rad: f64, h_m: f64) -> Vector3<f64> {
     Vector3::new(1.0 / (m + h_m), 1.0 / ((n + h_m) * lat_rad.cos()), -1.0)
 }
 
-/// Small NED displacement [m] of `lla` relative to `lla_ref` (first order; exact
+/// Small NED displacement \[m\] of `lla` relative to `lla_ref` (first order; exact
 /// enough for the metre-scale differences of filter innovations and evaluation).
 #[inline]
 pub fn lla_diff_ned(lla: &Vector3<f64>, lla_ref: &Vector3<f64>) -> Vector3<f64> {
@@ -90,14 +90,14 @@ pub fn lla_diff_ned(lla: &Vector3<f64>, lla_ref: &Vector3<f64>) -> Vector3<f64> 
     )
 }
 
-/// Move geodetic position `lla` by a small NED displacement [m].
+/// Move geodetic position `lla` by a small NED displacement \[m\].
 #[inline]
 pub fn lla_add_ned(lla: &Vector3<f64>, d_ned: &Vector3<f64>) -> Vector3<f64> {
     let s = ned_to_dlla_scale(lla.x, lla.z);
     lla + d_ned.component_mul(&s)
 }
 
-/// Geodetic (lat, lon, h) to ECEF [m].
+/// Geodetic (lat, lon, h) to ECEF \[m\].
 pub fn lla_to_ecef(lla: &Vector3<f64>) -> Vector3<f64> {
     let (_, n) = radii(lla.x);
     let (sl, cl) = lla.x.sin_cos();
@@ -109,7 +109,7 @@ pub fn lla_to_ecef(lla: &Vector3<f64>) -> Vector3<f64> {
     )
 }
 
-/// ECEF [m] to geodetic (lat, lon, h); iterative, converges to < 1e-9 m.
+/// ECEF \[m\] to geodetic (lat, lon, h); iterative, converges to < 1e-9 m.
 pub fn ecef_to_lla(r_e: &Vector3<f64>) -> Vector3<f64> {
     let p = (r_e.x * r_e.x + r_e.y * r_e.y).sqrt();
     let lon = r_e.y.atan2(r_e.x);

@@ -17,11 +17,11 @@ use nalgebra::{DMatrix, Matrix3, Vector3};
 /// Mean inertial quantities over a propagation interval.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct MeanMotion {
-    /// Specific force in n [m/s²].
+    /// Specific force in n \[m/s²\].
     pub f_n: Vector3<f64>,
-    /// Specific force in b [m/s²].
+    /// Specific force in b \[m/s²\].
     pub f_b: Vector3<f64>,
-    /// Angular rate w_ib^b [rad/s].
+    /// Angular rate w_ib^b \[rad/s\].
     pub w_b: Vector3<f64>,
 }
 

@@ -15,11 +15,11 @@ use nalgebra::Vector3;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TrajPoint {
     pub t: f64,
-    /// Latitude [rad], longitude [rad], height [m].
+    /// Latitude \[rad\], longitude \[rad\], height \[m\].
     pub lla: Vector3<f64>,
-    /// NED velocity [m/s], if known.
+    /// NED velocity \[m/s\], if known.
     pub v_n: Option<Vector3<f64>>,
-    /// Roll, pitch, yaw [rad], if known.
+    /// Roll, pitch, yaw \[rad\], if known.
     pub rpy: Option<Vector3<f64>>,
 }
 
@@ -28,9 +28,9 @@ pub struct EvalOptions {
     /// Outage windows for the per-gap statistic (reference epochs with a < t < b).
     pub gaps: Vec<Window>,
     /// Move the solution from the IMU centre to this body-frame point before
-    /// comparing (e.g. the antenna, when the reference is an antenna track) [m].
+    /// comparing (e.g. the antenna, when the reference is an antenna track) \[m\].
     pub lever_arm_b: Option<Vector3<f64>>,
-    /// Do not interpolate across solution holes longer than this [s].
+    /// Do not interpolate across solution holes longer than this \[s\].
     pub max_interp_gap_s: f64,
 }
 
@@ -106,13 +106,13 @@ pub struct EvalReport {
     pub horizontal: Stat,
     pub vertical: Stat,
     pub pos_3d: Stat,
-    /// Velocity N, E, D and 3D [m/s] (when both sides have velocity).
+    /// Velocity N, E, D and 3D \[m/s\] (when both sides have velocity).
     pub vel: Option<[Stat; 4]>,
-    /// Roll, pitch, yaw [rad] (when both sides have attitude).
+    /// Roll, pitch, yaw \[rad\] (when both sides have attitude).
     pub att: Option<[Stat; 3]>,
     pub gaps: Vec<GapReport>,
-    /// RMS over gaps of each gap's maximum: horizontal, vertical, 3D [m], roll,
-    /// pitch, yaw [rad]. None without gaps.
+    /// RMS over gaps of each gap's maximum: horizontal, vertical, 3D \[m\], roll,
+    /// pitch, yaw \[rad\]. None without gaps.
     pub gap_rms: Option<[f64; 6]>,
 }
 

@@ -163,24 +163,24 @@ pub struct RunSummary {
     /// Per aiding source: sums of the normalised innovation squared of the applied
     /// updates and of their rows (mean NIS per row = 1 for a consistent filter).
     pub aiding_nis: BTreeMap<&'static str, (f64, usize)>,
-    /// Time spent static according to the detector [s].
+    /// Time spent static according to the detector \[s\].
     pub static_s: f64,
-    /// Final GNSS-IMU time offset at `last_t` and its 1-sigma [s], when estimated.
+    /// Final GNSS-IMU time offset at `last_t` and its 1-sigma \[s\], when estimated.
     pub time_offset: Option<(f64, f64)>,
-    /// Final time-offset rate and its 1-sigma [s/s], when estimated.
+    /// Final time-offset rate and its 1-sigma \[s/s\], when estimated.
     pub time_offset_rate: Option<(f64, f64)>,
     /// Final odometer scale k and its 1-sigma, when estimated.
     pub odometer_scale: Option<(f64, f64)>,
-    /// Final IMU mounting roll, pitch, yaw [rad] and 1-sigma of pitch and yaw, when
+    /// Final IMU mounting roll, pitch, yaw \[rad\] and 1-sigma of pitch and yaw, when
     /// estimated.
     pub mounting: Option<(Vector3<f64>, [f64; 2])>,
-    /// Final receiver clock bias [m] and drift [m/s], when estimated.
+    /// Final receiver clock bias \[m\] and drift \[m/s\], when estimated.
     pub receiver_clock: Option<(f64, f64)>,
     /// The uniform status of each aiding source at the end, in registry order.
     pub aid_status: Vec<AidStatus>,
 }
 
-/// The uniform status of one aiding source, kept by the [`crate::aiding::Fuser`]
+/// The uniform status of one aiding source, kept by the [`crate::aiding::source::Fuser`]
 /// for every update the source makes.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct AidStatus {
@@ -198,6 +198,6 @@ pub struct AidStatus {
     pub test_ratio: Option<f64>,
     /// Whether the last update tried was applied.
     pub last_fused: bool,
-    /// Time of the last applied update (GNSS time scale) [s].
+    /// Time of the last applied update (GNSS time scale) \[s\].
     pub last_fused_t: Option<f64>,
 }

@@ -39,9 +39,9 @@ pub fn igg3_factor(t: f64, k0: f64, k1: f64) -> f64 {
 /// The Gauss-Markov fix error: nominal estimate and current steady-state sigma.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct FixBias {
-    /// Estimated correlated error of the fixes, NED [m].
+    /// Estimated correlated error of the fixes, NED \[m\].
     pub bias_ned_m: Vector3<f64>,
-    /// Steady-state 1-sigma per axis of the process, from the latest fix [m].
+    /// Steady-state 1-sigma per axis of the process, from the latest fix \[m\].
     pub sigma_ned_m: Vector3<f64>,
 }
 
@@ -88,7 +88,7 @@ impl InnovationScale {
     }
 
     /// The factor on the innovation covariance for the tests: 1 until a quarter of
-    /// the window is seen, then the median ratio within [1, MAX].
+    /// the window is seen, then the median ratio within \[1, MAX\].
     pub fn scale(&self) -> f64 {
         if self.window == 0 || self.ratios.len() < self.window.div_ceil(4).max(5).min(self.window) {
             return 1.0;
@@ -123,7 +123,7 @@ impl RejectStreak {
         }
     }
 
-    /// The next rejected fix: innovation and std NED [m]; `vel_std_mps`: the INS
+    /// The next rejected fix: innovation and std NED \[m\]; `vel_std_mps`: the INS
     /// velocity 1-sigma per axis (how far the innovation may move between fixes).
     pub fn push(&mut self, t: f64, y: Vector3<f64>, std: Vector3<f64>, vel_std_mps: Vector3<f64>) {
         let (t0, y0, s0) = self.last;
@@ -138,12 +138,12 @@ impl RejectStreak {
         self.last = (t, y, std);
     }
 
-    /// Innovation of the latest rejected fix, NED [m].
+    /// Innovation of the latest rejected fix, NED \[m\].
     pub fn last_innovation(&self) -> Vector3<f64> {
         self.last.1
     }
 
-    /// Time of the latest rejected fix [s].
+    /// Time of the latest rejected fix \[s\].
     pub fn last_t(&self) -> f64 {
         self.last.0
     }

@@ -33,11 +33,11 @@ pub enum IntegrityReference {
     DeadReckoning,
 }
 
-/// Settings of the monitor (`[spoofing]` in the run configuration).
+/// Settings of the monitor (`\[spoofing\]` in the run configuration).
 #[derive(Clone, Debug, PartialEq)]
 pub struct IntegrityOptions {
     pub enabled: bool,
-    /// Fixed distance threshold R [m] (seed 004: 10 m); None = off.
+    /// Fixed distance threshold R \[m\] (seed 004: 10 m); None = off.
     pub distance_m: Option<f64>,
     /// Tail probability of the per-epoch chi-square test; None = off.
     pub chi2_probability: Option<f64>,
@@ -46,23 +46,23 @@ pub struct IntegrityOptions {
     pub window_epochs: usize,
     /// Tail probability of each displacement test (3 dof).
     pub window_probability: f64,
-    /// Correlation time of the GNSS position error [s] (first-order Gauss-Markov):
+    /// Correlation time of the GNSS position error \[s\] (first-order Gauss-Markov):
     /// the displacement of the error over T has variance 2 sigma² (1 - exp(-T/tau)).
     /// 0 = white (conservative: full 2 sigma²).
     pub gnss_corr_time_s: f64,
     /// Failed epochs in a row that turn suspect into spoofed.
     pub confirm_epochs: usize,
-    /// Continuous agreement needed before GNSS is used again [s].
+    /// Continuous agreement needed before GNSS is used again \[s\].
     pub readmit_s: f64,
     /// Refused GNSS that has moved consistently with the reference (each epoch's
     /// displacement within 3 sigma of the reference's) for this long is re-admitted
-    /// even though it still disagrees in position [s]: after a slow attack that went
+    /// even though it still disagrees in position \[s\]: after a slow attack that went
     /// unseen the reference itself is off, and would otherwise refuse the real signal
     /// for good. A spoofer holding a constant offset this long is re-admitted too
     /// (logged). None = never.
     pub max_refuse_s: Option<f64>,
     /// The drift of the reference against the refused GNSS that `max_refuse_s`
-    /// still counts as consistent [m/s]: an unseen slow attack also leaves the
+    /// still counts as consistent \[m/s\]: an unseen slow attack also leaves the
     /// reference's velocity off (by less than the window test detects); a spoofer
     /// drifting faster than this is never re-admitted this way.
     pub readmit_drift_mps: f64,
@@ -140,18 +140,18 @@ impl Detector {
 /// One GNSS epoch against the reference: the innovation's norm and its NIS.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EpochCheck {
-    /// GNSS time [s].
+    /// GNSS time \[s\].
     pub t: f64,
-    /// Horizontal |r_GNSS - r_reference| [m]; NaN when the epoch has no position (e.g. tight
+    /// Horizontal |r_GNSS - r_reference| \[m\]; NaN when the epoch has no position (e.g. tight
     /// coupling with fewer than 4 satellites): the distance test then abstains.
     pub distance_m: f64,
     /// Normalised innovation squared y^T S^-1 y.
     pub nis: f64,
     /// Its degrees of freedom (rows of y).
     pub dof: usize,
-    /// 1-sigma of the reference position, sqrt(trace P_rr) [m].
+    /// 1-sigma of the reference position, sqrt(trace P_rr) \[m\].
     pub ref_pos_std_m: f64,
-    /// Lower bound of the distance threshold [m] (0: R as configured). Tight coupling
+    /// Lower bound of the distance threshold \[m\] (0: R as configured). Tight coupling
     /// tests the receiver's own single point fix, whose noise can exceed R.
     pub distance_floor_m: f64,
     /// Input of the displacement (window) test; None: the epoch has no position.
@@ -161,19 +161,19 @@ pub struct EpochCheck {
 /// One epoch's input to the displacement test.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StepInput {
-    /// Position innovation y = r_ant,INS - r_GNSS, NED [m] (before this epoch's update).
+    /// Position innovation y = r_ant,INS - r_GNSS, NED \[m\] (before this epoch's update).
     pub innovation_ned_m: Vector3<f64>,
-    /// 1-sigma of the fix, NED [m].
+    /// 1-sigma of the fix, NED \[m\].
     pub fix_std_ned_m: Vector3<f64>,
-    /// 1-sigma of the navigator's velocity, NED [m/s] (the reference's drift rate).
+    /// 1-sigma of the navigator's velocity, NED \[m/s\] (the reference's drift rate).
     pub vel_std_ned_mps: Vector3<f64>,
     /// Sum of the position corrections made by GNSS updates so far (before this
-    /// epoch's update), NED [m]. Velocity corrections are left in the reference: the
+    /// epoch's update), NED \[m\]. Velocity corrections are left in the reference: the
     /// odometer, NHC and ZUPT mostly undo them, and counting them as persistent
     /// over-corrects (false alarms at standstill).
     pub gnss_correction_ned_m: Vector3<f64>,
     /// Variance of the reference's own position increment since the previous epoch,
-    /// NED [m²], beyond (sigma_v T)²: e.g. the corrections of a dead reckoning that
+    /// NED \[m²\], beyond (sigma_v T)²: e.g. the corrections of a dead reckoning that
     /// the six-state fusion follows (summed over the window).
     pub ref_increment_var_ned_m2: Vector3<f64>,
 }

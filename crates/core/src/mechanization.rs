@@ -11,7 +11,7 @@ use nalgebra::{Matrix3, Vector3};
 /// What one mechanization step exposes to the error model.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct StepInfo {
-    /// Specific-force velocity increment resolved in n over the step [m/s].
+    /// Specific-force velocity increment resolved in n over the step \[m/s\].
     pub dv_f_n: Vector3<f64>,
 }
 

@@ -2,14 +2,14 @@
 //! from T". A window (a, b) removes the GNSS epochs with a < t < b, so the last fix
 //! before it is at a and the next one at b (the KF-GINS paper's protocol).
 
-/// One outage window (start, end) [s]; epochs strictly inside are withheld.
+/// One outage window (start, end) \[s\]; epochs strictly inside are withheld.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Window {
     pub start: f64,
     pub end: f64,
 }
 
-/// Periodic outages: windows [from + k*period, from + k*period + length] for k >= 0,
+/// Periodic outages: windows \[from + k*period, from + k*period + length\] for k >= 0,
 /// with window starts before `until` (if given).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Periodic {
@@ -43,7 +43,7 @@ impl OutageSchedule {
             })
     }
 
-    /// All windows that start inside [t0, t1], periodic ones expanded, sorted.
+    /// All windows that start inside \[t0, t1\], periodic ones expanded, sorted.
     pub fn windows_in(&self, t0: f64, t1: f64) -> Vec<Window> {
         let mut out: Vec<Window> = self
             .windows

@@ -1,15 +1,15 @@
 //! Six-state fusion of GNSS fixes with the dead-reckoning (INS/odometer/NHC) output.
-//! SYSTEM.md §5; seed 004 §3: "a 6-state KF, X = [r^n, v^n], H = I_6, dynamics
+//! SYSTEM.md §5; seed 004 §3: "a 6-state KF, X = \[r^n, v^n\], H = I_6, dynamics
 //! r_dot = v, v_dot = C_b^n f^b - 2 Omega_ie v + g, updated every N GNSS periods."
 //!
 //! The error-state filter (engine.rs) then runs as a pure dead-reckoning (DR)
 //! navigator: IMU + odometer + NHC + ZUPT, no GNSS after its start. This filter sits
 //! on top of it (a cascade, "loose coupling of the second kind"):
 //!
-//! - **State.** x = [r, v^n]: r is the position of the IMU centre, kept as geodetic
-//!   latitude/longitude [rad] and ellipsoidal height [m] (`lla`); its covariance rows
+//! - **State.** x = \[r, v^n\]: r is the position of the IMU centre, kept as geodetic
+//!   latitude/longitude \[rad\] and ellipsoidal height \[m\] (`lla`); its covariance rows
 //!   are in local NED metres at that position, as in the error-state filter (state.rs
-//!   POS). v^n is the NED velocity [m/s]. P is 6 x 6 over (r_N, r_E, r_D, v_N, v_E, v_D).
+//!   POS). v^n is the NED velocity \[m/s\]. P is 6 x 6 over (r_N, r_E, r_D, v_N, v_E, v_D).
 //! - **Prediction.** The DR solves the stated dynamics with the same specific force
 //!   (mechanization.rs, plus its odometer/NHC corrections), so the prediction takes the
 //!   DR's increments over the step, Δr_DR and Δv_DR, as the known input:
@@ -17,7 +17,7 @@
 //!   ```text
 //!   r_{k+1} = r_k + Δr_DR + (v_k - v_DR,k) dt      (r_dot = v)
 //!   v_{k+1} = v_k + Δv_DR                          (v_dot = C_b^n f^b - 2 Ω_ie v + g)
-//!   Phi = [[I, I dt], [0, I]]
+//!   Phi = [\[I, I dt\], \[0, I\]]
 //!   ```
 //!
 //!   (the Coriolis and transport-rate terms of a velocity difference of a few cm/s
@@ -40,7 +40,7 @@
 //!   already removed with GNSS is an increment error too: it contributes P - P+).
 //!   The increment errors of successive intervals are treated as uncorrelated.
 //! - **Update** with a fix moved to the IMU centre through the DR attitude (antenna
-//!   lever arm, [`ImuFix::from_antenna`]): z = [r_GNSS; v_GNSS], H = I_6 (I_3 when
+//!   lever arm, [`ImuFix::from_antenna`]): z = \[r_GNSS; v_GNSS\], H = I_6 (I_3 when
 //!   the fix has no velocity), R = diag of the fix's std columns; Joseph form. Only
 //!   every N-th GNSS epoch is used (`every` = N; the first epoch is always used).
 //!
@@ -54,20 +54,20 @@ use std::num::NonZeroU32;
 /// A GNSS fix moved from the antenna to the IMU centre (what H = I maps onto).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ImuFix {
-    /// Time of validity [s].
+    /// Time of validity \[s\].
     pub t: f64,
-    /// IMU-centre position: latitude [rad], longitude [rad], ellipsoidal height [m].
+    /// IMU-centre position: latitude \[rad\], longitude \[rad\], ellipsoidal height \[m\].
     pub lla: Vector3<f64>,
-    /// Position 1-sigma N, E, D [m].
+    /// Position 1-sigma N, E, D \[m\].
     pub pos_std_ned_m: Vector3<f64>,
-    /// IMU-centre velocity NED [m/s] and its 1-sigma, when the fix has them.
+    /// IMU-centre velocity NED \[m/s\] and its 1-sigma, when the fix has them.
     pub vel_ned_mps: Option<Vector3<f64>>,
     pub vel_std_ned_mps: Option<Vector3<f64>>,
 }
 
 impl ImuFix {
     /// SYSTEM.md §3a with the DR attitude `c_bn` (C_b^n), the body rate `w_ib_b`
-    /// [rad/s] and the antenna lever arm `lever_arm_b` [m, body F R D]:
+    /// \[rad/s\] and the antenna lever arm `lever_arm_b` \[m, body F R D\]:
     /// r_IMU = r_ant - C_b^n l^b,
     /// v_IMU = v_ant - (C_b^n (w_ib^b x l^b) - w_in^n x (C_b^n l^b)).
     /// The velocity is kept only with its std (both finite).
@@ -134,12 +134,12 @@ impl std::error::Error for SixStateError {}
 /// The 6-state filter and the DR state it last followed.
 #[derive(Clone, Debug)]
 pub struct SixState {
-    /// Time of the state [s] (the DR's time scale).
+    /// Time of the state \[s\] (the DR's time scale).
     t: f64,
-    /// IMU-centre position: latitude [rad], longitude [rad], height [m].
+    /// IMU-centre position: latitude \[rad\], longitude \[rad\], height \[m\].
     lla: Vector3<f64>,
     v_ned_mps: Vector3<f64>,
-    /// Covariance of (r NED [m], v NED [m/s]).
+    /// Covariance of (r NED \[m\], v NED \[m/s\]).
     p: Matrix6<f64>,
     every: NonZeroU32,
     /// GNSS epochs offered to `update` so far.
@@ -163,7 +163,7 @@ fn wrap_dlon(d: f64) -> f64 {
     }
 }
 
-/// NED displacement [m] from `lla_ref` to `lla` (first order, metre-scale).
+/// NED displacement \[m\] from `lla_ref` to `lla` (first order, metre-scale).
 fn ned_between(lla: &Vector3<f64>, lla_ref: &Vector3<f64>) -> Vector3<f64> {
     let (m, n) = radii(lla_ref.x);
     Vector3::new(
@@ -231,7 +231,7 @@ impl SixState {
     /// Covariance prediction from the last one to the current time (after
     /// [`SixState::follow_dr`]) with the DR increment noise; `p_dr_now` is the DR
     /// filter's covariance now. Without DR tracking, Q = 0. Returns the diagonal of
-    /// Q's position block (variance of the DR position increment, NED [m²]).
+    /// Q's position block (variance of the DR position increment, NED \[m²\]).
     pub fn predict_covariance_from_dr(&mut self, p_dr_now: &DMatrix<f64>) -> Vector3<f64> {
         let Some(d) = self.dr_noise.as_mut() else {
             return Vector3::zeros();
@@ -254,22 +254,22 @@ impl SixState {
         f.std()
     }
 
-    /// IMU-centre position: latitude [rad], longitude [rad], height [m].
+    /// IMU-centre position: latitude \[rad\], longitude \[rad\], height \[m\].
     pub fn lla(&self) -> Vector3<f64> {
         self.lla
     }
 
-    /// NED velocity [m/s].
+    /// NED velocity \[m/s\].
     pub fn v_ned_mps(&self) -> Vector3<f64> {
         self.v_ned_mps
     }
 
-    /// Covariance of (r NED [m], v NED [m/s]).
+    /// Covariance of (r NED \[m\], v NED \[m/s\]).
     pub fn covariance(&self) -> &Matrix6<f64> {
         &self.p
     }
 
-    /// 1-sigma of (r_N, r_E, r_D [m], v_N, v_E, v_D [m/s]).
+    /// 1-sigma of (r_N, r_E, r_D \[m\], v_N, v_E, v_D \[m/s\]).
     pub fn std(&self) -> [f64; 6] {
         std::array::from_fn(|i| self.p[(i, i)].max(0.0).sqrt())
     }
@@ -309,7 +309,7 @@ impl SixState {
         self.t = self.t.max(dr.t);
     }
 
-    /// Covariance prediction over `dt_s`: P = Phi P Phi^T + Q, Phi = [[I, I dt], [0, I]]
+    /// Covariance prediction over `dt_s`: P = Phi P Phi^T + Q, Phi = [\[I, I dt\], \[0, I\]]
     /// (SYSTEM.md §2 with §5's dynamics); `q` e.g. from [`DrIncrementNoise`]. Ignored
     /// when dt or Q is not finite or dt < 0.
     pub fn predict_covariance(&mut self, dt_s: f64, q: &Matrix6<f64>) {
@@ -324,7 +324,7 @@ impl SixState {
     }
 
     /// Innovation of `fix` against the current prediction, for an integrity test:
-    /// y = z - H x (position NED [m], then velocity NED [m/s] when the fix has one)
+    /// y = z - H x (position NED \[m\], then velocity NED \[m/s\] when the fix has one)
     /// and its covariance S = H P H^T + R (3 x 3 or 6 x 6). Distance test: |y_pos|;
     /// NIS: y^T S^-1 y with y.len() dof. None for a fix that is not finite. Call
     /// after [`SixState::follow_dr`] for the fix time.
@@ -432,7 +432,7 @@ pub struct DrIncrementNoise {
     c: DMatrix<f64>,
     /// Cov(e(t_ref)), 6 x 6.
     p_ref: Matrix6<f64>,
-    /// Start of the interval [s].
+    /// Start of the interval \[s\].
     t_ref: f64,
 }
 

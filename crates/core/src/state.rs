@@ -4,7 +4,7 @@
 //! filter.
 //!
 //! Error conventions: position, velocity, attitude, time offset, receiver clock and
-//! vehicle states are x_est - x_true (position in NED metres, velocity NED [m/s],
+//! vehicle states are x_est - x_true (position in NED metres, velocity NED \[m/s\],
 //! attitude phi with
 //! C_b^n,est = (I - phi x) C_b^n,true, mounting dalpha with C_b^m,est =
 //! (I - dalpha x) C_b^m,true, odometer scale dk); the twelve IMU error states are
@@ -21,21 +21,21 @@ pub enum Block {
     AccelBias,
     GyroScale,
     AccelScale,
-    /// GNSS-to-IMU time offset [s].
+    /// GNSS-to-IMU time offset \[s\].
     TimeOffset,
-    /// Rate of the GNSS-to-IMU time offset [s/s].
+    /// Rate of the GNSS-to-IMU time offset \[s/s\].
     TimeOffsetRate,
-    /// Odometer scale-factor error dk [-] (SYSTEM.md §4b; seed 004 eq. 3).
+    /// Odometer scale-factor error dk \[-\] (SYSTEM.md §4b; seed 004 eq. 3).
     OdometerScale,
-    /// IMU-to-vehicle mounting angle errors: pitch, yaw [rad] (seed 004 dalpha_p,
+    /// IMU-to-vehicle mounting angle errors: pitch, yaw \[rad\] (seed 004 dalpha_p,
     /// dalpha_y; roll about the forward axis is not observable from the vehicle
     /// velocity and is not estimated).
     Mounting,
-    /// Receiver clock bias c dt_r [m] (tight coupling; seed 000 eq. 19-22).
+    /// Receiver clock bias c dt_r \[m\] (tight coupling; seed 000 eq. 19-22).
     ClockBias,
-    /// Receiver clock drift c dt_r' [m/s] (seed 000 eq. 23-28).
+    /// Receiver clock drift c dt_r' \[m/s\] (seed 000 eq. 23-28).
     ClockDrift,
-    /// Time-correlated error of the loosely coupled GNSS fixes, NED [m]
+    /// Time-correlated error of the loosely coupled GNSS fixes, NED \[m\]
     /// (fix_error.rs), b_est - b_true.
     GnssBias,
     /// A block an aiding source defines in its own file (aiding/source.rs): its

@@ -14,7 +14,7 @@ use std::collections::VecDeque;
 #[derive(Clone, Debug)]
 pub struct StaticDetector {
     window_s: f64,
-    /// (t, dt, f [m/s²], w [rad/s]) of the samples in the window.
+    /// (t, dt, f \[m/s²\], w \[rad/s\]) of the samples in the window.
     samples: VecDeque<(f64, f64, Vector3<f64>, Vector3<f64>)>,
     sum_f: Vector3<f64>,
     sum_f2: f64,
@@ -38,7 +38,7 @@ impl StaticDetector {
         }
     }
 
-    /// Add one compensated IMU interval ending at `t`: specific force and rate [SI].
+    /// Add one compensated IMU interval ending at `t`: specific force and rate \[SI\].
     pub fn push(&mut self, t: f64, dt: f64, f_b: &Vector3<f64>, w_b: &Vector3<f64>) {
         if dt <= 0.0 {
             return;
@@ -69,8 +69,8 @@ impl StaticDetector {
         *self = StaticDetector::new(self.window_s);
     }
 
-    /// The window's mean angular rate [rad/s] when it is full and static:
-    /// std(f) < `accel_std_max` [m/s²] and std(w) < `gyro_std_max` [rad/s] (vector
+    /// The window's mean angular rate \[rad/s\] when it is full and static:
+    /// std(f) < `accel_std_max` \[m/s²\] and std(w) < `gyro_std_max` \[rad/s\] (vector
     /// standard deviations: sqrt(mean |x|² - |mean x|²)).
     pub fn static_mean_rate(&self, accel_std_max: f64, gyro_std_max: f64) -> Option<Vector3<f64>> {
         let n = self.samples.len();
@@ -124,7 +124,7 @@ impl<T: Copy> Window<T> {
     }
 }
 
-/// Mean of the speeds [m/s] in the window ending at `t_now` (None: no reading).
+/// Mean of the speeds \[m/s\] in the window ending at `t_now` (None: no reading).
 pub fn mean_speed(w: &Window<f64>, t_now: f64) -> Option<f64> {
     let (n, sum) = w
         .recent(t_now)
@@ -132,8 +132,8 @@ pub fn mean_speed(w: &Window<f64>, t_now: f64) -> Option<f64> {
     (n > 0).then(|| sum / n as f64)
 }
 
-/// Mean horizontal acceleration [m/s²] from a running sum of velocity increments
-/// (NED [m/s]) sampled in the window; None until it spans half the window.
+/// Mean horizontal acceleration \[m/s²\] from a running sum of velocity increments
+/// (NED \[m/s\]) sampled in the window; None until it spans half the window.
 pub fn mean_horizontal_accel(w: &Window<Vector3<f64>>, window_s: f64) -> Option<f64> {
     let ((t0, v0), (t1, v1)) = w.ends()?;
     let span = t1 - t0;

@@ -10,63 +10,63 @@ use std::sync::Arc;
 /// One IMU output interval (t - dt, t], as increments in the body frame (FRD).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ImuSample {
-    /// End of the interval [s].
+    /// End of the interval \[s\].
     pub t: f64,
-    /// Interval length [s].
+    /// Interval length \[s\].
     pub dt: f64,
-    /// Angle increment over the interval [rad].
+    /// Angle increment over the interval \[rad\].
     pub dtheta: Vector3<f64>,
-    /// Velocity increment (integrated specific force) over the interval [m/s].
+    /// Velocity increment (integrated specific force) over the interval \[m/s\].
     pub dvel: Vector3<f64>,
 }
 
 /// A GNSS receiver fix for loose coupling: antenna position, optional velocity.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GnssFix {
-    /// Time of validity [s].
+    /// Time of validity \[s\].
     pub t: f64,
-    /// Antenna position: latitude [rad], longitude [rad], ellipsoidal height [m].
+    /// Antenna position: latitude \[rad\], longitude \[rad\], ellipsoidal height \[m\].
     pub lla: Vector3<f64>,
-    /// Position 1-sigma north, east, down [m]; each > 0.
+    /// Position 1-sigma north, east, down \[m\]; each > 0.
     pub std_ned: Vector3<f64>,
-    /// Antenna velocity north, east, down [m/s], if the source gives it.
+    /// Antenna velocity north, east, down \[m/s\], if the source gives it.
     pub vel_ned: Option<Vector3<f64>>,
-    /// Velocity 1-sigma north, east, down [m/s], if given.
+    /// Velocity 1-sigma north, east, down \[m/s\], if given.
     pub vel_std_ned: Option<Vector3<f64>>,
 }
 
 /// One satellite's measurements at one epoch, prepared by the GNSS layer for tight
 /// coupling (SYSTEM.md §3b; seed 000 eq. 12-18). ECEF at the reception time.
 /// Everything the GNSS layer can model is already removed, so that
-/// `pseudorange_m = |sat_pos - antenna| + receiver clock bias [m] + noise`.
+/// `pseudorange_m = |sat_pos - antenna| + receiver clock bias \[m\] + noise`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SatMeasurement {
     /// GPS PRN.
     pub prn: u8,
     /// Satellite position at transmission (light time solved), rotated into the ECEF
-    /// frame at reception (Sagnac) [m].
+    /// frame at reception (Sagnac) \[m\].
     pub sat_pos_ecef_m: Vector3<f64>,
-    /// Its rate of change with the reception time [m/s].
+    /// Its rate of change with the reception time \[m/s\].
     pub sat_vel_ecef_mps: Vector3<f64>,
-    /// Elevation seen from the receiver [rad].
+    /// Elevation seen from the receiver \[rad\].
     pub elevation_rad: f64,
     /// Pseudorange with the satellite clock (relativity and TGD included) and either
     /// the broadcast ionosphere and troposphere models or the DGPS correction
-    /// applied: geometric range + receiver clock bias [m].
+    /// applied: geometric range + receiver clock bias \[m\].
     pub pseudorange_m: Option<f64>,
-    /// 1-sigma of `pseudorange_m` (elevation weighted) [m].
+    /// 1-sigma of `pseudorange_m` (elevation weighted) \[m\].
     pub pseudorange_std_m: f64,
     /// Range rate from the Doppler, -lambda D, with the satellite clock drift (and the
     /// DGPS range-rate correction) removed: d|sat - antenna|/dt + receiver clock
-    /// drift [m/s].
+    /// drift \[m/s\].
     pub range_rate_mps: Option<f64>,
-    /// 1-sigma of `range_rate_mps` [m/s].
+    /// 1-sigma of `range_rate_mps` \[m/s\].
     pub range_rate_std_mps: f64,
-    /// Carrier phase lambda L [m] with the satellite clock removed and, with DGPS, the
+    /// Carrier phase lambda L \[m\] with the satellite clock removed and, with DGPS, the
     /// integrated range-rate correction added (never the code-based correction, whose
     /// noise would enter the time difference). Continuous while `lost_lock` is false.
     pub carrier_m: Option<f64>,
-    /// 1-sigma of one carrier phase [m] (elevation weighted).
+    /// 1-sigma of one carrier phase \[m\] (elevation weighted).
     pub carrier_std_m: f64,
     /// Loss of lock or a cycle slip flagged by the receiver since the previous epoch
     /// (RINEX LLI bit 0): the carrier is not continuous with the previous epoch.
@@ -78,7 +78,7 @@ pub struct SatMeasurement {
 /// All satellites of one receiver epoch, for tight coupling.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GnssRawEpoch {
-    /// Time of validity (GPS time, seconds of the run's week) [s].
+    /// Time of validity (GPS time, seconds of the run's week) \[s\].
     pub t: f64,
     pub sats: Vec<SatMeasurement>,
     /// The epoch's single point solution, when there is one: used to find the
@@ -89,11 +89,11 @@ pub struct GnssRawEpoch {
 /// Navigation state of the IMU centre.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NavState {
-    /// Time [s].
+    /// Time \[s\].
     pub t: f64,
-    /// Latitude [rad], longitude [rad], ellipsoidal height [m].
+    /// Latitude \[rad\], longitude \[rad\], ellipsoidal height \[m\].
     pub lla: Vector3<f64>,
-    /// Velocity in NED [m/s].
+    /// Velocity in NED \[m/s\].
     pub v_n: Vector3<f64>,
     /// Attitude C_b^n as a unit quaternion.
     pub q_bn: UnitQuaternion<f64>,
@@ -103,13 +103,13 @@ pub struct NavState {
 /// `dtheta_c = (dtheta - gyro_bias * dt) / (1 + gyro_scale)`, per axis; same for accel.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ImuErrors {
-    /// Gyro bias [rad/s].
+    /// Gyro bias \[rad/s\].
     pub gyro_bias: Vector3<f64>,
-    /// Accelerometer bias [m/s²].
+    /// Accelerometer bias \[m/s²\].
     pub accel_bias: Vector3<f64>,
-    /// Gyro scale factor error [-] (1e-6 = 1 ppm).
+    /// Gyro scale factor error \[-\] (1e-6 = 1 ppm).
     pub gyro_scale: Vector3<f64>,
-    /// Accelerometer scale factor error [-].
+    /// Accelerometer scale factor error \[-\].
     pub accel_scale: Vector3<f64>,
 }
 
@@ -126,23 +126,23 @@ impl ImuErrors {
 }
 
 /// Vehicle speed from an odometer (wheel encoder, CAN speed) at time `t`: the
-/// forward speed of the vehicle reference point, before scale correction [m/s].
+/// forward speed of the vehicle reference point, before scale correction \[m/s\].
 /// Pulse counts are converted to speed by the reader (v = K_OD dN / dt, seed 004 eq. 2).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct OdometerSample {
-    /// Time of validity [s]: the end of the counting interval.
+    /// Time of validity \[s\]: the end of the counting interval.
     pub t: f64,
-    /// Forward speed [m/s] (negative when reversing, if the sensor tells).
+    /// Forward speed \[m/s\] (negative when reversing, if the sensor tells).
     pub speed_mps: f64,
-    /// Length of the counting interval [s]; the speed is its mean. 0 = instantaneous.
+    /// Length of the counting interval \[s\]; the speed is its mean. 0 = instantaneous.
     pub interval_s: f64,
 }
 
 /// A heading measurement: azimuth of a body-fixed direction (the dual-antenna
-/// baseline) from true north, clockwise [rad], with its 1-sigma [rad].
+/// baseline) from true north, clockwise \[rad\], with its 1-sigma \[rad\].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HeadingObs {
-    /// Time of validity [s] (GNSS time scale).
+    /// Time of validity \[s\] (GNSS time scale).
     pub t: f64,
     pub heading_rad: f64,
     pub std_rad: f64,
@@ -160,7 +160,7 @@ pub enum Measurement {
 }
 
 impl Measurement {
-    /// Time of validity [s]. An odometer speed averaged over a counting interval is
+    /// Time of validity \[s\]. An odometer speed averaged over a counting interval is
     /// the speed at the interval's midpoint (exact for constant acceleration).
     pub fn t(&self) -> f64 {
         match self {

@@ -1,7 +1,7 @@
 //! Tightly coupled Doppler range rate, one satellite. SYSTEM.md §3b; seed 000
 //! eq. 16-18, 23-28.
 //!
-//!   rr_INS = u . (v_sat - v_ant) + d                       (ECEF; d: clock drift [m/s])
+//!   rr_INS = u . (v_sat - v_ant) + d                       (ECEF; d: clock drift \[m/s\])
 //!   y = rr_INS - rr_GNSS ~ -u^T C_n^e d v_ant - dv^T (I - u u^T) / |r| C_n^e d r_ant + dd
 //!   R = sigma²
 //!

@@ -16,12 +16,12 @@ use nalgebra::Vector3;
 pub struct GnssGuard {
     monitor: IntegrityMonitor,
     readmit_drift_mps: f64,
-    /// Sum of the position corrections made by this source's updates, NED [m].
+    /// Sum of the position corrections made by this source's updates, NED \[m\].
     correction_ned_m: Vector3<f64>,
 }
 
 impl GnssGuard {
-    /// None when the monitor is off (`[spoofing]`).
+    /// None when the monitor is off (`\[spoofing\]`).
     pub fn from_config(cfg: &NavConfig) -> Option<Self> {
         cfg.integrity.enabled.then(|| GnssGuard {
             monitor: IntegrityMonitor::new(cfg.integrity.clone()),

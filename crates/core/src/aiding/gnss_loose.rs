@@ -1,6 +1,6 @@
 //! Loosely coupled GNSS: the receiver's fixes (position, velocity) into the
 //! error-state filter, then the course over ground as heading when configured
-//! (REFERENCES [SYS] §3a, §3c; models in gnss_position.rs, gnss_velocity.rs,
+//! (REFERENCES \[SYS\] §3a, §3c; models in gnss_position.rs, gnss_velocity.rs,
 //! heading.rs).
 //!
 //! Policy (docs/ALGORITHMS.md "Loose coupling"): the time-correlated share of each
@@ -25,7 +25,7 @@ use crate::state::{Block, POS, VEL};
 use crate::types::{GnssFix, HeadingObs, Measurement};
 use nalgebra::{DVector, Vector3};
 
-/// Loosely coupled GNSS fixes as an aiding source (`[gnss]` with fixes).
+/// Loosely coupled GNSS fixes as an aiding source (`\[gnss\]` with fixes).
 pub struct GnssLoose {
     opt: GnssOptions,
     heading: HeadingOptions,
@@ -34,7 +34,7 @@ pub struct GnssLoose {
     guard: Option<GnssGuard>,
     /// The current run of gate-rejected fixes (fix_error.rs).
     fix_streak: Option<RejectStreak>,
-    /// Steady-state sigma of the fix-error states, NED [m] (zero until the first fix).
+    /// Steady-state sigma of the fix-error states, NED \[m\] (zero until the first fix).
     fix_bias_sigma_ned_m: Vector3<f64>,
     fix_pos_scale: InnovationScale,
     fix_vel_scale: InnovationScale,

@@ -15,7 +15,7 @@ use crate::state::{Block, ATT, POS};
 use crate::types::GnssFix;
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
-/// Lever arm C_b^n l^b [m, NED] and the Jacobian (3 x n) of the INS antenna position
+/// Lever arm C_b^n l^b \[m, NED\] and the Jacobian (3 x n) of the INS antenna position
 /// error (NED metres) with respect to the error state.
 pub fn antenna_position_jacobian(ctx: &AidingContext) -> (Vector3<f64>, DMatrix<f64>) {
     let c_bn = ctx.nav.q_bn.to_rotation_matrix().into_inner();

@@ -1,11 +1,11 @@
-//! `GnssFusion::SixState` (REFERENCES [SYS] §5; seed 004 §3): the fixes go to a
+//! `GnssFusion::SixState` (REFERENCES \[SYS\] §5; seed 004 §3): the fixes go to a
 //! six-state position/velocity filter (six_state.rs) that follows the dead reckoning,
 //! never to the error-state filter, which dead-reckons with the vehicle aiding.
 //!
 //! Policy: every N-th fix is fused (the others are neither used nor counted as
 //! rejected), moved to the IMU centre with the dead reckoning's attitude, position
 //! and (when `use_velocity`) velocity, with the std overrides and the innovation gate
-//! and its timeout of `[gnss]`; under the integrity monitor the monitor replaces the
+//! and its timeout of `\[gnss\]`; under the integrity monitor the monitor replaces the
 //! gate.
 
 use super::gnss_integrity::GnssGuard;

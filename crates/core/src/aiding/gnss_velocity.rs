@@ -1,8 +1,8 @@
 //! Loosely coupled GNSS velocity with the lever-arm rotation term. SYSTEM.md §3a.
 //!
 //!   v_ant = v^n + C_b^n (w_ib^b x l^b) - w_in^n x (C_b^n l^b)
-//!   y = v_ant,INS - v_GNSS ~ dv + ([C (w x l)] x - [w_in x][C l x]) phi
-//!                            - C [l x] (b_g + diag(w) s_g)
+//!   y = v_ant,INS - v_GNSS ~ dv + (\[C (w x l)\] x - \[w_in x\]\[C l x\]) phi
+//!                            - C \[l x\] (b_g + diag(w) s_g)
 //!                            + a^n dtau   (time-offset state, if present)
 //!   R = diag(vel_std²)
 
@@ -13,7 +13,7 @@ use crate::state::{Block, ATT, BG, SG, VEL};
 use crate::types::GnssFix;
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
-/// Antenna velocity in NED predicted from the INS [m/s].
+/// Antenna velocity in NED predicted from the INS \[m/s\].
 pub fn antenna_velocity(ctx: &AidingContext) -> Vector3<f64> {
     let nav = ctx.nav;
     let c_bn = nav.q_bn.to_rotation_matrix().into_inner();

@@ -3,7 +3,7 @@
 //! vehicle's forward axis d_b = C_m^b e_x (course over ground while driving).
 //!
 //!   d^n = C_b^n d_b,  psi = atan2(d^n_E, d^n_N)
-//!   y = wrap(psi_INS - psi_meas) ~ g [d^n x] phi  (- g C_b^n C_m^b [e_x x] dalpha)
+//!   y = wrap(psi_INS - psi_meas) ~ g \[d^n x\] phi  (- g C_b^n C_m^b \[e_x x\] dalpha)
 //!   g = dpsi/dd^n = (-d_E, d_N, 0) / (d_N² + d_E²),  R = std²
 
 use super::{AidingContext, Linearized};
@@ -60,7 +60,7 @@ use super::Aiding;
 use crate::config::{HeadingOptions, NavConfig};
 use crate::types::Measurement;
 
-/// Dual-antenna heading as an aiding source (`[heading]` with a baseline).
+/// Dual-antenna heading as an aiding source (`\[heading\]` with a baseline).
 pub struct DualAntennaHeading {
     opt: HeadingOptions,
     baseline_b: Vector3<f64>,

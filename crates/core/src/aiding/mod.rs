@@ -35,7 +35,7 @@ use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 pub struct VehicleEstimate {
     /// C_b^m: IMU frame to vehicle frame (nominal mounting corrected by the filter).
     pub c_bm: Matrix3<f64>,
-    /// Lever arm IMU centre -> vehicle reference point, IMU frame [m].
+    /// Lever arm IMU centre -> vehicle reference point, IMU frame \[m\].
     pub lever_arm_b: Vector3<f64>,
     /// Odometer scale estimate k (true = (1 + k) measured).
     pub odometer_scale: f64,
@@ -44,9 +44,9 @@ pub struct VehicleEstimate {
 /// Receiver clock estimates (tight coupling; zero otherwise).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ReceiverClock {
-    /// c dt_r [m].
+    /// c dt_r \[m\].
     pub bias_m: f64,
-    /// c dt_r' [m/s].
+    /// c dt_r' \[m/s\].
     pub drift_mps: f64,
 }
 
@@ -54,15 +54,15 @@ pub struct ReceiverClock {
 pub struct AidingContext<'a> {
     pub nav: &'a NavState,
     pub layout: &'a StateLayout,
-    /// Compensated angular rate w_ib^b over the last IMU interval [rad/s].
+    /// Compensated angular rate w_ib^b over the last IMU interval \[rad/s\].
     pub w_ib_b: Vector3<f64>,
-    /// Acceleration d(v^n)/dt over the last IMU interval [m/s²].
+    /// Acceleration d(v^n)/dt over the last IMU interval \[m/s²\].
     pub a_n: Vector3<f64>,
-    /// Antenna lever arm in the body frame [m].
+    /// Antenna lever arm in the body frame \[m\].
     pub lever_arm_b: Vector3<f64>,
     pub vehicle: VehicleEstimate,
     pub clock: ReceiverClock,
-    /// Estimated time-correlated error of the GNSS fixes, NED [m] (zero without the
+    /// Estimated time-correlated error of the GNSS fixes, NED \[m\] (zero without the
     /// `GnssBias` block).
     pub gnss_bias_ned_m: Vector3<f64>,
 }
@@ -82,9 +82,9 @@ pub enum Aiding<'a> {
     GnssVelocity(&'a GnssFix),
     /// Dual-antenna heading or course over ground.
     Heading(&'a HeadingObs, HeadingAxis),
-    /// Non-holonomic constraint with lateral/vertical std [m/s].
+    /// Non-holonomic constraint with lateral/vertical std \[m/s\].
     Nhc([f64; 2]),
-    /// Odometer speed [m/s], its std [m/s], optional NHC rows (seed 004's 3-row form);
+    /// Odometer speed \[m/s\], its std \[m/s\], optional NHC rows (seed 004's 3-row form);
     /// `calibrate` = false leaves the scale and mounting states out (near standstill).
     Odometer {
         speed_mps: f64,
@@ -92,9 +92,9 @@ pub enum Aiding<'a> {
         nhc_std: Option<[f64; 2]>,
         calibrate: bool,
     },
-    /// Zero velocity, std [m/s].
+    /// Zero velocity, std \[m/s\].
     Zupt(f64),
-    /// Zero angular rate: window-mean compensated rate [rad/s], std [rad/s].
+    /// Zero angular rate: window-mean compensated rate \[rad/s\], std \[rad/s\].
     Zaru(Vector3<f64>, f64),
     /// Tight coupling, one satellite: pseudorange.
     Pseudorange(&'a SatMeasurement),

@@ -1,7 +1,7 @@
 //! Non-holonomic constraint: a land vehicle's reference point neither slides
 //! sideways nor leaves the road, v^m_y = v^m_z = 0 (SYSTEM.md §4a; seed 002 eq. 1, 12).
 //!
-//!   y = [v^m_y, v^m_z]_INS - 0 ~ rows 2-3 of the vehicle_frame Jacobian
+//!   y = \[v^m_y, v^m_z\]_INS - 0 ~ rows 2-3 of the vehicle_frame Jacobian
 //!   R = diag(std_lat², std_vert²)
 //!
 //! When it is applied (mode, speed, static, innovation test): `NhcSource` below.
@@ -29,7 +29,7 @@ use super::source::{chi2_gate, AidingSource, Fuser};
 use super::Aiding;
 use crate::config::{NavConfig, NhcMode, NhcOptions};
 
-/// The non-holonomic constraint as an aiding source (`[nhc]`).
+/// The non-holonomic constraint as an aiding source (`\[nhc\]`).
 pub struct NhcSource {
     opt: NhcOptions,
     next_t: f64,

@@ -4,7 +4,7 @@
 //!   y = v^m_x,INS - (1 + k) s_od ~ row 1 of the vehicle_frame Jacobian - s_od dk
 //!   R = std²
 //!
-//! With `nhc_std`, the lateral and vertical rows (v^m = [v 0 0]^T, seed 004's
+//! With `nhc_std`, the lateral and vertical rows (v^m = \[v 0 0\]^T, seed 004's
 //! three-row measurement) are appended.
 //!
 //! Near standstill (`calibrate` = false) the scale and mounting columns are zeroed:
@@ -54,11 +54,11 @@ use super::Aiding;
 use crate::config::{NavConfig, NhcMode, OdometerOptions};
 use crate::types::Measurement;
 
-/// The odometer as an aiding source (`[odometer]`).
+/// The odometer as an aiding source (`\[odometer\]`).
 pub struct OdometerSource {
     opt: OdometerOptions,
     /// Seed 004's three-row form: the NHC rows with the odometer (when no separate
-    /// NHC runs), lateral and vertical std [m/s].
+    /// NHC runs), lateral and vertical std \[m/s\].
     nhc_std: Option<[f64; 2]>,
 }
 

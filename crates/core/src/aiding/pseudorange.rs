@@ -1,7 +1,7 @@
 //! Tightly coupled pseudorange, one satellite. SYSTEM.md §3b; seed 000 eq. 15-22.
 //!
 //!   r_ant   = r_imu + C_n^e C_b^n l^b                      (ECEF)
-//!   rho_INS = |r_sat - r_ant| + b                          (b: receiver clock [m])
+//!   rho_INS = |r_sat - r_ant| + b                          (b: receiver clock \[m\])
 //!   y = rho_INS - rho_GNSS ~ -u^T C_n^e d r_ant + db,  u = (r_sat - r_ant) / |.|
 //!   R = sigma² (elevation weighted by the GNSS layer)
 //!
@@ -14,7 +14,7 @@ use crate::state::Block;
 use crate::types::SatMeasurement;
 use nalgebra::{DMatrix, DVector, Matrix3, RowVector3, Vector3};
 
-/// Antenna position (ECEF [m]), C_n^e, and the NED Jacobian of its error.
+/// Antenna position (ECEF \[m\]), C_n^e, and the NED Jacobian of its error.
 pub fn antenna_ecef(ctx: &AidingContext) -> (Vector3<f64>, Matrix3<f64>, DMatrix<f64>) {
     let (l_n, h_pos) = super::gnss_position::antenna_position_jacobian(ctx);
     let c = c_ne(ctx.nav.lla.x, ctx.nav.lla.y);

@@ -28,7 +28,7 @@ pub enum Handled {
 /// Facts the sources tell each other.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Shared {
-    /// Time of the last GNSS epoch used (GNSS time) [s]: the NHC's outage mode and
+    /// Time of the last GNSS epoch used (GNSS time) \[s\]: the NHC's outage mode and
     /// the loose drift floor read it.
     pub last_gnss_used_t: f64,
     /// The static detector sees the vehicle at rest (ZUPT): no NHC meanwhile.
@@ -89,7 +89,7 @@ impl Fuser<'_> {
         &self.ins.nav
     }
 
-    /// Time of the current state on the GNSS time scale [s].
+    /// Time of the current state on the GNSS time scale \[s\].
     pub fn time_gnss(&self) -> f64 {
         self.ins.time_gnss()
     }
@@ -108,12 +108,12 @@ impl Fuser<'_> {
         self.ins.filter.std(i)
     }
 
-    /// 1-sigma of the velocity, NED [m/s].
+    /// 1-sigma of the velocity, NED \[m/s\].
     pub fn vel_std_ned_mps(&self) -> Vector3<f64> {
         self.ins.vel_std_ned_mps()
     }
 
-    /// Compensated angular rate over the last IMU interval [rad/s].
+    /// Compensated angular rate over the last IMU interval \[rad/s\].
     pub fn w_ib_b(&self) -> Vector3<f64> {
         self.ins.w_ib_b
     }
@@ -126,7 +126,7 @@ impl Fuser<'_> {
         &self.ins.vehicle
     }
 
-    /// Sum of the mechanization's own velocity increments (no feedback), NED [m/s].
+    /// Sum of the mechanization's own velocity increments (no feedback), NED \[m/s\].
     pub fn mech_dv_n(&self) -> Vector3<f64> {
         self.ins.mech_dv_n
     }
@@ -137,7 +137,7 @@ impl Fuser<'_> {
     }
 
     /// The mechanization's own displacement since the last restart (feedback jumps
-    /// excluded), ECEF [m]; zero unless a source tracks it.
+    /// excluded), ECEF \[m\]; zero unless a source tracks it.
     pub fn displacement_ecef_m(&self) -> Vector3<f64> {
         self.ins.displacement_ecef_m()
     }

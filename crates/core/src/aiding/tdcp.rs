@@ -3,7 +3,7 @@
 //!
 //! The integer ambiguity cancels between epochs k-1 and k of continuous tracking:
 //!
-//!   z      = (phi_k - phi_{k-1}) / dt                         (phi: carrier [m])
+//!   z      = (phi_k - phi_{k-1}) / dt                         (phi: carrier \[m\])
 //!   r_prev = r_ant,k - D                                      (D: INS antenna
 //!            displacement over the interval, from the mechanization, ECEF)
 //!   z_INS  = (|r_sat,k - r_ant,k| - |r_sat,k-1 - r_prev|) / dt + d
@@ -24,14 +24,14 @@ use nalgebra::{DMatrix, DVector, Vector3};
 /// What TDCP needs from the previous epoch of a satellite.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TdcpPrevious {
-    /// Time of the previous epoch [s].
+    /// Time of the previous epoch \[s\].
     pub t: f64,
     pub sat_pos_ecef_m: Vector3<f64>,
     pub carrier_m: f64,
     pub carrier_std_m: f64,
 }
 
-/// The INS antenna displacement over the interval (ECEF [m]) and its length [s].
+/// The INS antenna displacement over the interval (ECEF \[m\]) and its length \[s\].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Interval {
     pub antenna_displacement_ecef_m: Vector3<f64>,

@@ -1,4 +1,4 @@
-//! Tightly coupled GNSS (REFERENCES [SYS] §3b; seed 000): one receiver epoch of
+//! Tightly coupled GNSS (REFERENCES \[SYS\] §3b; seed 000): one receiver epoch of
 //! per-satellite pseudoranges with Doppler or time-differenced carrier phase, the
 //! receiver clock bias and drift as filter states (models in pseudorange.rs,
 //! doppler.rs, tdcp.rs).
@@ -24,10 +24,10 @@ use crate::types::{GnssFix, GnssRawEpoch, ImuSample, Measurement, SatMeasurement
 use nalgebra::Vector3;
 
 /// After a return from a GNSS gap (or a carrier disagreement), TDCP waits this long
-/// [s] for the pseudoranges and Doppler to correct the INS velocity.
+/// \[s\] for the pseudoranges and Doppler to correct the INS velocity.
 const CARRIER_WARMUP_S: f64 = 5.0;
 
-/// Tight coupling as an aiding source (`[gnss] coupling = "tight"`).
+/// Tight coupling as an aiding source (`\[gnss\] coupling = "tight"`).
 pub struct TightGnss {
     opt: TightOptions,
     lever_arm_b: Vector3<f64>,
@@ -38,7 +38,7 @@ pub struct TightGnss {
     prev: Vec<Option<TdcpPrevious>>,
     /// Time of the previous raw epoch.
     prev_t: Option<f64>,
-    /// C_n^e C_b^n l^b at the previous epoch [m].
+    /// C_n^e C_b^n l^b at the previous epoch \[m\].
     prev_lever_ecef_m: Vector3<f64>,
     /// Time of the last epoch with a pseudorange fused (None: none yet).
     last_pr_used_t: Option<f64>,

@@ -7,8 +7,8 @@
 //! x_est - x_true, C_b^n,est = (I - phi x) C_b^n, C_b^m,est = (I - dalpha x) C_b^m with
 //! dalpha = (0, p, y); IMU errors true - estimate, so w_est = w + db_g + diag(w) ds_g):
 //!
-//!   d v^m = C_b^m ( C_n^b dv - C_n^b [v^n x] phi - [l x] (db_g + diag(w) ds_g) )
-//!           + [v^m x] dalpha
+//!   d v^m = C_b^m ( C_n^b dv - C_n^b \[v^n x\] phi - \[l x\] (db_g + diag(w) ds_g) )
+//!           + \[v^m x\] dalpha
 
 use super::AidingContext;
 use crate::attitude::skew;
@@ -16,7 +16,7 @@ use crate::earth::omega_ie_n;
 use crate::state::{Block, ATT, BG, SG, VEL};
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
-/// v^m [m/s] and its 3 x n Jacobian.
+/// v^m \[m/s\] and its 3 x n Jacobian.
 pub fn vehicle_velocity(ctx: &AidingContext) -> (Vector3<f64>, DMatrix<f64>) {
     let nav = ctx.nav;
     let n = ctx.layout.len();

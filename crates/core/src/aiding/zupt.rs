@@ -21,7 +21,7 @@ pub fn linearize_zupt(ctx: &AidingContext, std_mps: f64) -> Linearized {
     }
 }
 
-/// `w_ib_b_mean`: compensated angular rate averaged over the static window [rad/s].
+/// `w_ib_b_mean`: compensated angular rate averaged over the static window \[rad/s\].
 pub fn linearize_zaru(ctx: &AidingContext, w_ib_b_mean: &Vector3<f64>, std: f64) -> Linearized {
     let c_nb = ctx.nav.q_bn.to_rotation_matrix().into_inner().transpose();
     let y = w_ib_b_mean - c_nb * omega_ie_n(ctx.nav.lla.x);
@@ -50,11 +50,11 @@ use crate::events::Event;
 use crate::static_detect::{mean_horizontal_accel, mean_speed, StaticDetector, Window};
 use crate::types::{ImuSample, Measurement};
 
-/// Zero-velocity / zero-angular-rate updates as an aiding source (`[zupt]`).
+/// Zero-velocity / zero-angular-rate updates as an aiding source (`\[zupt\]`).
 pub struct Zupt {
     opt: ZuptOptions,
     odometer_enabled: bool,
-    /// The largest gyro white-noise density [rad/s/sqrt(s)] (ZARU std floor).
+    /// The largest gyro white-noise density \[rad/s/sqrt(s)\] (ZARU std floor).
     arw_max: f64,
     detector: StaticDetector,
     /// The last ZUPT was refused by its innovation test (not static meanwhile).

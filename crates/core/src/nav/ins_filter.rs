@@ -5,7 +5,7 @@
 //!
 //! The covariance is propagated every `covariance_period_s` (and always right before
 //! an update) with the transition matrix built from the mean specific force and rate
-//! over that span (docs/ALGORITHMS.md "Error-state filter"; REFERENCES [SYS] §2).
+//! over that span (docs/ALGORITHMS.md "Error-state filter"; REFERENCES \[SYS\] §2).
 
 use crate::aiding::{AidingContext, Linearized, ReceiverClock, VehicleEstimate};
 use crate::attitude::{c_bn_from_euler, q_bn_from_euler, quat_from_rotvec};
@@ -22,7 +22,7 @@ use nalgebra::{DMatrix, DVector, Vector3};
 /// How the error states of a source's block evolve between updates.
 #[derive(Clone, Debug, PartialEq)]
 pub enum BlockProcess {
-    /// Random walk with this PSD per state [unit²/s].
+    /// Random walk with this PSD per state \[unit²/s\].
     RandomWalk(f64),
     /// First-order Gauss-Markov with correlation time `corr_time_s` and steady-state
     /// sigma per state (the nominal value decays with it too); exact discretisation.
@@ -67,16 +67,16 @@ pub struct InsFilter {
     /// Installation estimates (mounting, odometer scale): filter states the
     /// odometer and the NHC both read.
     pub(crate) vehicle: VehicleEstimate,
-    /// GNSS-IMU time offset tau0 + rate (t - t0) [s], [s/s] (timeline.rs).
+    /// GNSS-IMU time offset tau0 + rate (t - t0) \[s\], \[s/s\] (timeline.rs).
     pub(crate) time_offset_s: f64,
     pub(crate) time_offset_rate: f64,
     acc: Accum,
-    /// Compensated angular rate over the last IMU interval [rad/s].
+    /// Compensated angular rate over the last IMU interval \[rad/s\].
     pub(crate) w_ib_b: Vector3<f64>,
-    /// Acceleration d(v^n)/dt over the last IMU interval [m/s²].
+    /// Acceleration d(v^n)/dt over the last IMU interval \[m/s²\].
     pub(crate) a_n: Vector3<f64>,
     /// Running sum of the mechanization's own velocity increments (no feedback), NED
-    /// [m/s].
+    /// \[m/s\].
     pub(crate) mech_dv_n: Vector3<f64>,
     /// Sums of the raw IMU increments integrated so far (dt, dtheta, dvel).
     pub(crate) integrated: (f64, Vector3<f64>, Vector3<f64>),
@@ -85,7 +85,7 @@ pub struct InsFilter {
     source_blocks: Vec<SourceBlock>,
     random_walks: Vec<(Block, f64)>,
     /// The INS displacement since `restart_displacement` from the mechanization only
-    /// (feedback jumps excluded), ECEF [m], and the ECEF position after the last
+    /// (feedback jumps excluded), ECEF \[m\], and the ECEF position after the last
     /// mechanization step or feedback; tracked when a source asks (TDCP).
     displacement: Option<(Vector3<f64>, Vector3<f64>)>,
     /// Feedbacks applied so far (sources that keep a reference to the INS position
@@ -101,7 +101,7 @@ pub struct InsFilter {
 #[derive(Clone, Debug, PartialEq)]
 pub enum Fused {
     /// Applied: the error-state correction dx that was fed back (state.rs
-    /// conventions; dx[0..3] the position error, NED [m]).
+    /// conventions; dx\[0..3\] the position error, NED \[m\]).
     Applied(DVector<f64>),
     Rejected,
     Singular,
@@ -114,7 +114,7 @@ impl Fused {
         matches!(self, Fused::Applied(_))
     }
 
-    /// The position correction fed back, NED [m] (x_est - x_true convention).
+    /// The position correction fed back, NED \[m\] (x_est - x_true convention).
     pub fn position_correction(&self) -> Option<Vector3<f64>> {
         match self {
             Fused::Applied(dx) => Some(Vector3::new(dx[POS], dx[POS + 1], dx[POS + 2])),
@@ -146,7 +146,7 @@ fn ins_layout(cfg: &NavConfig) -> StateLayout {
 }
 
 impl InsFilter {
-    /// The filter at `t0` with position `lla`, attitude `rpy` [rad] and velocity
+    /// The filter at `t0` with position `lla`, attitude `rpy` \[rad\] and velocity
     /// `v_n`; `blocks`: the sources' blocks with their initial variances per state.
     pub(crate) fn new(
         cfg: &NavConfig,
@@ -268,7 +268,7 @@ impl InsFilter {
         }
     }
 
-    /// Time of the current state on the GNSS time scale [s].
+    /// Time of the current state on the GNSS time scale \[s\].
     pub(crate) fn time_gnss(&self) -> f64 {
         self.nav.t - self.time_offset_s
     }
@@ -323,7 +323,7 @@ impl InsFilter {
         }
     }
 
-    /// Propagate the covariance over the accumulated span (REFERENCES [SYS] §2).
+    /// Propagate the covariance over the accumulated span (REFERENCES \[SYS\] §2).
     pub(crate) fn flush_covariance(&mut self) {
         let a = self.acc;
         if a.dt <= 0.0 {
@@ -484,7 +484,7 @@ impl InsFilter {
         self.six_state_follow_dr();
     }
 
-    /// The mechanization's own displacement since the last restart, ECEF [m].
+    /// The mechanization's own displacement since the last restart, ECEF \[m\].
     pub(crate) fn displacement_ecef_m(&self) -> Vector3<f64> {
         self.displacement.map_or(Vector3::zeros(), |(d, _)| d)
     }
@@ -511,7 +511,7 @@ impl InsFilter {
         s
     }
 
-    /// 1-sigma of the velocity, NED [m/s] (as of the last covariance flush).
+    /// 1-sigma of the velocity, NED \[m/s\] (as of the last covariance flush).
     pub(crate) fn vel_std_ned_mps(&self) -> Vector3<f64> {
         Vector3::from_fn(|k, _| self.filter.std(VEL + k))
     }

@@ -6,7 +6,7 @@
 //!
 //! Time handling: a measurement that falls inside an IMU interval splits it (the
 //! increments are shared in proportion to time), so the update happens exactly at
-//! its epoch (REFERENCES [SYS] §1, seed 000 eq. 31-32; timeline.rs).
+//! its epoch (REFERENCES \[SYS\] §1, seed 000 eq. 31-32; timeline.rs).
 
 use super::ins_filter::InsFilter;
 use super::timeline::{Due, Inbox, IntervalRest};
@@ -21,11 +21,11 @@ use crate::state::{Block, StateLayout, ATT, N_INS, POS, VEL};
 use crate::types::{ImuErrors, ImuSample, Measurement, NavState};
 use nalgebra::{DMatrix, Vector3};
 
-/// Correlation time of the unknown manoeuvres over an IMU gap [s]: the velocity
+/// Correlation time of the unknown manoeuvres over an IMU gap \[s\]: the velocity
 /// random walk's PSD is gap_accel² x this.
 const GAP_MANOEUVRE_S: f64 = 1.0;
 
-/// IMU intervals longer than this (and than 5 nominal intervals) are gaps [s].
+/// IMU intervals longer than this (and than 5 nominal intervals) are gaps \[s\].
 const GAP_MIN_S: f64 = 0.1;
 
 /// Why a run could not start or had to stop (no initial pose, numerical failure).
@@ -48,18 +48,18 @@ pub struct Navigator {
     status: Vec<AidStatus>,
     shared: Shared,
     summary: RunSummary,
-    /// Shortest IMU interval over the first 100 samples (IMU gap detection) [s].
+    /// Shortest IMU interval over the first 100 samples (IMU gap detection) \[s\].
     nominal_dt: f64,
 }
 
 impl Navigator {
     /// Initialise at time `t0` with position `lla` (IMU centre) and attitude `rpy`
-    /// [rad]; velocity, IMU errors and uncertainties from `cfg.initial`.
+    /// \[rad\]; velocity, IMU errors and uncertainties from `cfg.initial`.
     pub fn new(cfg: &NavConfig, t0: f64, lla: Vector3<f64>, rpy: Vector3<f64>) -> Self {
         Self::with_velocity(cfg, t0, lla, rpy, cfg.initial.v_n)
     }
 
-    /// As [`Navigator::new`] with an initial NED velocity [m/s].
+    /// As [`Navigator::new`] with an initial NED velocity \[m/s\].
     pub fn with_velocity(
         cfg: &NavConfig,
         t0: f64,
@@ -144,13 +144,13 @@ impl Navigator {
         self.shared.is_static
     }
 
-    /// Current GNSS-IMU time offset estimate [s] (0 when not estimated): a GNSS
+    /// Current GNSS-IMU time offset estimate \[s\] (0 when not estimated): a GNSS
     /// epoch tagged t is applied at IMU time t + offset.
     pub fn time_offset(&self) -> f64 {
         self.ins.time_offset_s
     }
 
-    /// Current GNSS-IMU time offset rate [s/s].
+    /// Current GNSS-IMU time offset rate \[s/s\].
     pub fn time_offset_rate(&self) -> f64 {
         self.ins.time_offset_rate
     }
@@ -168,8 +168,8 @@ impl Navigator {
         self.ins.std21()
     }
 
-    /// Sums of the raw IMU increments integrated so far: (dt [s], dtheta [rad],
-    /// dvel [m/s]), body frame.
+    /// Sums of the raw IMU increments integrated so far: (dt \[s\], dtheta \[rad\],
+    /// dvel \[m/s\]), body frame.
     pub fn integrated(&self) -> (f64, Vector3<f64>, Vector3<f64>) {
         self.ins.integrated
     }
@@ -183,7 +183,7 @@ impl Navigator {
         &self.status
     }
 
-    /// Roll, pitch, yaw [rad] of the current attitude.
+    /// Roll, pitch, yaw \[rad\] of the current attitude.
     pub fn rpy(&self) -> Vector3<f64> {
         euler_from_q_bn(&self.ins.nav.q_bn)
     }

@@ -1,7 +1,7 @@
 //! Where and how the navigation starts: the initial position (given, or the first
 //! fix moved to the IMU centre), the initial attitude (given, static levelling with
 //! gyrocompassing or the first GNSS course, or in-motion alignment from GNSS) and the
-//! IMU samples read while aligning (REFERENCES [SYS] §1 "Initial alignment").
+//! IMU samples read while aligning (REFERENCES \[SYS\] §1 "Initial alignment").
 
 use crate::alignment;
 use crate::attitude::{c_bn_from_euler, euler_from_c_bn};

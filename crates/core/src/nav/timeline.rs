@@ -17,7 +17,7 @@ use crate::outage::OutageSchedule;
 use crate::types::{ImuSample, Measurement};
 
 /// Times closer than this to the time reached or to an interval end are taken as
-/// equal to it [s].
+/// equal to it \[s\].
 pub const SNAP_S: f64 = 1e-9;
 
 /// The part of one IMU interval not yet integrated: (t_reached, end.t].
@@ -31,7 +31,7 @@ impl IntervalRest {
         IntervalRest { rest: sample }
     }
 
-    /// Time up to which the interval has been integrated [s].
+    /// Time up to which the interval has been integrated \[s\].
     pub fn t_reached(&self) -> f64 {
         self.rest.t - self.rest.dt
     }
