@@ -1,9 +1,9 @@
-//! Plausibility checks of `navfuse run`: inputs and results that parse but cannot be
-//! what the user meant (units, axes, time scales, weeks, empty files). Each check is a
-//! small function of plain values returning its findings, so that it can be tested
-//! alone and later move into a library crate. A [`Severity::Error`] means the result
-//! would be meaningless: the run is refused (before it) or reported as failed (after
-//! it, with its output kept); a [`Severity::Warning`] names the likely mistake and the
+//! Plausibility checks of the run pipeline (`navfuse run`): inputs and results that
+//! parse but cannot be what the user meant (units, axes, time scales, weeks, empty
+//! files). Each check is a small function of plain values returning its findings, so
+//! that it can be tested alone. A [`Severity::Error`] means the result would be
+//! meaningless: the run is refused (before it) or reported as failed (after it, with
+//! its output kept); a [`Severity::Warning`] names the likely mistake and the
 //! configuration key to change.
 
 use nalgebra::Vector3;
