@@ -15,14 +15,14 @@ use navfuse_io::imu::open_imu;
 /// The GNSS-IMU time offset line found by the estimation pass.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TimeOffsetFit {
-    /// Offset at `t0` [s].
+    /// Offset at `t0` \[s\].
     pub tau0: f64,
-    /// Its 1-sigma at the end of the pass [s].
+    /// Its 1-sigma at the end of the pass \[s\].
     pub tau0_sd: f64,
     /// Rate [s/s].
     pub rate: f64,
     pub rate_sd: f64,
-    /// The pass's first IMU time [s].
+    /// The pass's first IMU time \[s\].
     pub t0: f64,
 }
 
