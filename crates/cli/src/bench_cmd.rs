@@ -6,8 +6,8 @@
 //!    (reset between runs through /proc/self/clear_refs): it must not grow with length.
 //! 3. The core filter loop alone on samples already in memory: IMU samples per second.
 
-use crate::run_cmd::run_job;
 use anyhow::{Context, Result};
+use navfuse_app::run_job;
 use navfuse_io::config::load_kfgins_yaml;
 use navfuse_io::gnss::read_gnss;
 use navfuse_io::imu::open_imu;

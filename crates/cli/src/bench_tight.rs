@@ -16,8 +16,8 @@
 //! depends on the machine. The exit status is non-zero only when the benchmark could
 //! not run as specified (e.g. too few satellites).
 
-use crate::run_cmd::run_job;
 use anyhow::{bail, Context, Result};
+use navfuse_app::run_job;
 use navfuse_io::config::RunConfig;
 use navfuse_io::imu::open_imu;
 use navfuse_io::input::{Coupling, GnssFormat};
@@ -222,7 +222,7 @@ pub fn main(
     let mut raw = Vec::new();
     for _ in 0..repeat {
         let t = Instant::now();
-        let g = crate::gnss_input::load_rinex(src, rinex)?;
+        let g = navfuse_app::gnss_input::load_rinex(src, rinex)?;
         best_gnss = best_gnss.min(t.elapsed().as_secs_f64());
         raw = g.raw;
     }

@@ -20,7 +20,7 @@ pub(crate) struct Track {
 }
 
 pub(crate) fn load_nav(path: &Path) -> Result<Track> {
-    let rows = read_nav(path).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let rows = read_nav(path)?;
     let week = rows.first().map_or(0, |r| r.0);
     let points = rows
         .iter()
@@ -41,7 +41,7 @@ fn load_pos(path: &Path, quality: Vec<u8>) -> Result<Track> {
         decimate_s: None,
         time_offset_s: 0.0,
     };
-    let g = read_gnss(&src).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let g = read_gnss(&src)?;
     let points = g
         .fixes
         .iter()

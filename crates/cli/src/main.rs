@@ -1,13 +1,11 @@
 //! `navfuse`: the command line. Subcommands live in their own files:
-//! `run_cmd` (the navigator over files), `eval_cmd` (scoring), `bench_cmd` and
-//! `bench_tight` (speed, loose and tight coupling),
+//! `run_cmd` (the navigator over files, a thin call into `navfuse_app`), `eval_cmd`
+//! (scoring), `bench_cmd` and `bench_tight` (speed, loose and tight coupling),
 //! `sim_cmd` (the simulator), `reproduce_cmd` (the papers' experiments).
 
 mod bench_cmd;
 mod bench_tight;
 mod eval_cmd;
-mod gnss_input;
-mod plausibility;
 mod reproduce_cmd;
 mod run_cmd;
 mod sim_cmd;
@@ -287,7 +285,10 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("navfuse: error: {e:#}");
-            match e.downcast_ref::<run_cmd::Interrupted>() {
+            let interrupted = e
+                .downcast_ref::<navfuse_app::Error>()
+                .and_then(navfuse_app::Error::interrupted);
+            match interrupted {
                 Some(i) => ExitCode::from(i.exit_status()),
                 None => ExitCode::FAILURE,
             }

@@ -3,7 +3,7 @@
 //!
 //! - `--attack`: `scenarios/seed004_attack.toml` (built in: two laps of the seed 004
 //!   loop, a 300 s drift attack at 2 m/s) simulated once per seed; every variant runs
-//!   on the same data (`run_cmd::run_job`) and is scored against the truth: alarms
+//!   on the same data (`navfuse_app::run_job`) and is scored against the truth: alarms
 //!   before the attack, detection delay and detector, maximum errors during the attack
 //!   and in the 60 s after it, 3D RMSE over the run; mean [min, max] over the seeds
 //!   beside the paper's statements.
@@ -38,7 +38,7 @@ use serde_json::{json, Value};
 
 use super::{seed004_odometer, seed004_start, spread, user_start, Variant};
 use crate::eval_cmd::load_nav;
-use crate::run_cmd::run_job;
+use navfuse_app::run_job;
 
 const ATTACK_SCENARIO: &str = "scenarios/seed004_attack.toml";
 const ATTACK_TEXT: &str = include_str!("../../../scenarios/seed004_attack.toml");

@@ -2,7 +2,7 @@
 //!
 //! For each random seed: simulate the experiment's scenario (scenarios/*.toml, built
 //! into the binary), run every variant of the navigator on the same data with
-//! `run_cmd::run_job`, score it against the simulated truth, and print the mean and
+//! `navfuse_app::run_job`, score it against the simulated truth, and print the mean and
 //! spread over seeds beside the paper's figures. Improvements follow seed 002 eq. 18:
 //! (RMSE_base - RMSE_variant) / RMSE_base.
 
@@ -20,7 +20,7 @@ use navfuse_sim::scenario::Scenario;
 use serde_json::{json, Value};
 
 use crate::eval_cmd::load_nav;
-use crate::run_cmd::run_job;
+use navfuse_app::run_job;
 
 /// `reproduce seed004 --attack / --jump-runs / --clean-hours` (spoofing, issue 6).
 #[path = "reproduce_attack.rs"]
@@ -634,7 +634,7 @@ fn gnss_only_track(cfg: &RunConfig) -> Result<Vec<TrajPoint>> {
     else {
         bail!("the GNSS-only variant needs a RINEX input");
     };
-    let g = crate::gnss_input::load_rinex(src, r)?;
+    let g = navfuse_app::gnss_input::load_rinex(src, r)?;
     Ok(g.fixes
         .iter()
         .map(|f| TrajPoint {

@@ -1,8 +1,8 @@
-//! RINEX GNSS input for `navfuse run`: observations and broadcast ephemerides (and
+//! RINEX GNSS input for the run pipeline: observations and broadcast ephemerides (and
 //! DGPS corrections) go through the GNSS layer (`navfuse_gnss::tight_prep`) and come
 //! out as single point fixes (loose coupling) or per-satellite epochs (tight).
 
-use anyhow::{anyhow, Result};
+use crate::Error;
 use nalgebra::Vector3;
 use navfuse_core::earth::lla_to_ecef;
 use navfuse_core::{GnssFix, GnssRawEpoch};
@@ -45,19 +45,24 @@ pub fn prep_config(r: &RinexGnss, iono: IonoModel) -> TightPrepConfig {
 
 /// Read the observations, navigation data and DGPS source of a RINEX input and
 /// prepare every epoch.
-pub fn load_rinex(src: &GnssSource, r: &RinexGnss) -> Result<RinexInput> {
-    let err = |e: navfuse_io::InputError| anyhow!("{e}");
-    let nav = read_rinex_nav(&r.nav_path).map_err(err)?;
+pub fn load_rinex(src: &GnssSource, r: &RinexGnss) -> Result<RinexInput, Error> {
+    let nav = read_rinex_nav(&r.nav_path)?;
     if nav.gps.is_empty() {
-        anyhow::bail!("{}: no GPS ephemerides", r.nav_path.display());
+        return Err(Error::Other(format!(
+            "{}: no GPS ephemerides",
+            r.nav_path.display()
+        )));
     }
     let iono = IonoModel::from_broadcast(nav.iono_alpha, nav.iono_beta);
     let ephs = EphemerisSet::new(nav.gps);
-    let obs = read_rinex_obs_report(&src.path).map_err(err)?;
+    let obs = read_rinex_obs_report(&src.path)?;
     let mut warnings: Vec<String> = nav.warnings.iter().chain(&obs.warnings).cloned().collect();
     let epochs = obs.epochs;
     let Some(week) = epochs.first().map(|e| e.t.week) else {
-        anyhow::bail!("{}: no GPS observation epochs", src.path.display());
+        return Err(Error::Other(format!(
+            "{}: no GPS observation epochs",
+            src.path.display()
+        )));
     };
     let cfg = prep_config(r, iono);
     let dgps = match r.dgps.as_ref().map(|d| &d.kind) {
@@ -65,7 +70,7 @@ pub fn load_rinex(src: &GnssSource, r: &RinexGnss) -> Result<RinexInput> {
         Some(DgpsKind::Corrections(p)) => {
             // With the station position (the file's `#` line), the corrections also
             // carry the model difference between rover and station heights.
-            let f = navfuse_io::dgps::read_dgps_file(p).map_err(err)?;
+            let f = navfuse_io::dgps::read_dgps_file(p)?;
             let c = DgpsCorrections::new(f.corrections);
             Some(match f.reference_lla {
                 Some(lla) => c.with_reference_position(lla_to_ecef(&lla)),
@@ -76,7 +81,7 @@ pub fn load_rinex(src: &GnssSource, r: &RinexGnss) -> Result<RinexInput> {
             obs_path,
             position_lla,
         }) => {
-            let base: Vec<ObsEpoch> = read_rinex_obs(obs_path).map_err(err)?;
+            let base: Vec<ObsEpoch> = read_rinex_obs(obs_path)?;
             let ref_ecef = lla_to_ecef(&Vector3::from(*position_lla));
             Some(
                 DgpsCorrections::new(corrections_from_reference_station(

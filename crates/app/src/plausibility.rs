@@ -1,9 +1,9 @@
-//! Plausibility checks of `navfuse run`: inputs and results that parse but cannot be
-//! what the user meant (units, axes, time scales, weeks, empty files). Each check is a
-//! small function of plain values returning its findings, so that it can be tested
-//! alone and later move into a library crate. A [`Severity::Error`] means the result
-//! would be meaningless: the run is refused (before it) or reported as failed (after
-//! it, with its output kept); a [`Severity::Warning`] names the likely mistake and the
+//! Plausibility checks of the run pipeline (`navfuse run`): inputs and results that
+//! parse but cannot be what the user meant (units, axes, time scales, weeks, empty
+//! files). Each check is a small function of plain values returning its findings, so
+//! that it can be tested alone. A [`Severity::Error`] means the result would be
+//! meaningless: the run is refused (before it) or reported as failed (after it, with
+//! its output kept); a [`Severity::Warning`] names the likely mistake and the
 //! configuration key to change.
 
 use nalgebra::Vector3;
@@ -16,16 +16,16 @@ const G0: f64 = 9.806_65;
 /// GPS - UTC has been a whole number of seconds between these (1996: 11 s ... 2017: 18 s;
 /// with a margin either side).
 const LEAP_SECONDS: std::ops::RangeInclusive<i64> = 10..=19;
-/// Lever arms longer than this [m] are probably given in cm or mm.
+/// Lever arms longer than this \[m\] are probably given in cm or mm.
 pub const MAX_LEVER_ARM_M: f64 = 5.0;
-/// A time-offset prior this wide [s] lets the first pass lock onto a wrong epoch.
+/// A time-offset prior this wide \[s\] lets the first pass lock onto a wrong epoch.
 pub const MAX_TIME_OFFSET_STD_S: f64 = 30.0;
 /// Fitted offsets beyond these are reported.
 pub const MAX_TIME_OFFSET_S: f64 = 1.0;
 pub const MAX_TIME_OFFSET_RATE_PPM: f64 = 1000.0;
 /// Below this fraction of usable GNSS epochs used, the reasons are reported.
 pub const MIN_GNSS_USED_FRACTION: f64 = 0.5;
-/// Land-vehicle roll / pitch beyond this [deg] at alignment is reported.
+/// Land-vehicle roll / pitch beyond this \[deg\] at alignment is reported.
 pub const MAX_LAND_TILT_DEG: f64 = 45.0;
 /// Seconds of IMU data at the start of the file looked at by [`imu_window`].
 pub const DEFAULT_IMU_WINDOW_S: f64 = 10.0;
@@ -191,7 +191,7 @@ pub fn gnss_usage(u: &GnssUse) -> Vec<Finding> {
     ))]
 }
 
-/// The fitted GNSS-IMU time offset [s] and rate [s/s].
+/// The fitted GNSS-IMU time offset \[s\] and rate \[s/s\].
 pub fn time_offset_fit(tau_s: f64, rate: f64) -> Vec<Finding> {
     let mut out = Vec::new();
     if !tau_s.is_finite() || !rate.is_finite() {
@@ -223,7 +223,7 @@ pub fn time_offset_fit(tau_s: f64, rate: f64) -> Vec<Finding> {
     out
 }
 
-/// GPS - UTC [s] in the GPS week `week` (18 s when unknown): the leap seconds since 1999.
+/// GPS - UTC \[s\] in the GPS week `week` (18 s when unknown): the leap seconds since 1999.
 pub fn leap_seconds(week: Option<u32>) -> f64 {
     // First GPS week of each value: 1999-01-01, 2006-01-01, 2009-01-01, 2012-07-01,
     // 2015-07-01, 2017-01-01.
@@ -258,7 +258,7 @@ pub fn leap_second_fit(tau0_s: f64, tau_s: f64, rate: f64) -> Vec<Finding> {
     ))]
 }
 
-/// The time-offset prior std [s] of the configuration.
+/// The time-offset prior std \[s\] of the configuration.
 pub fn time_offset_prior(std_s: f64) -> Vec<Finding> {
     if std_s < MAX_TIME_OFFSET_STD_S {
         return Vec::new();
@@ -431,7 +431,7 @@ pub fn imu_magnitudes(
 const MAX_ANY_ROLL_DEG: f64 = 100.0;
 const MAX_ANY_PITCH_DEG: f64 = 75.0;
 
-/// Roll and pitch of the aligned attitude [deg]. A land vehicle (NHC or odometer) sits
+/// Roll and pitch of the aligned attitude \[deg\]. A land vehicle (NHC or odometer) sits
 /// within a few degrees of level; a tilt beyond [`MAX_LAND_TILT_DEG`] means the sensor
 /// axes were not turned into the body frame; any vehicle upside down or on end at the
 /// start likewise.

@@ -1,0 +1,262 @@
+//! [`FileSink`]: the files of `navfuse run` in one output directory: solution.nav
+//! (KF-GINS), imu_err.txt, std.txt, solution.csv as configured, then events.log,
+//! integrity.csv (with the monitor) and summary.json.
+//!
+//! Records go to a writer thread in batches: formatting text costs about as much as
+//! navigating, and the machine may have two cores. Every batch is handed to the files,
+//! so that after a crash, a full disk or a stop they end within a batch of each other
+//! (or, when the run stops cleanly, at the same epoch).
+
+use crate::error::{Error, ResultExt};
+use crate::sink::{OutputLayout, SolutionSink};
+use crate::summary::JobResult;
+use navfuse_io::nav::{
+    CsvWriter, ImuErrWriter, NavWriter, RecordWriter, SolutionRecord, StdWriter,
+};
+use navfuse_io::InputError;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::mpsc::SyncSender;
+use std::thread::JoinHandle;
+
+/// Records per batch handed to the writer thread.
+const BATCH: usize = 2048;
+
+/// Writes a run's output into a directory, as `navfuse run --out DIR` does.
+pub struct FileSink {
+    dir: PathBuf,
+    batch: Vec<SolutionRecord>,
+    tx: Option<SyncSender<Vec<SolutionRecord>>>,
+    writer: Option<JoinHandle<Result<(), InputError>>>,
+}
+
+impl FileSink {
+    /// Prepare `dir` (created if missing): leftovers of an earlier run (events.log,
+    /// summary.json, integrity.csv) are removed and summary.json is reserved, saying
+    /// `"status": "running"` until the run ends.
+    pub fn create(dir: &Path) -> Result<Self, Error> {
+        // Leftovers of an earlier run in the same directory must not sit beside this one's.
+        for stale in ["events.log", "summary.json", "integrity.csv"] {
+            let _ = std::fs::remove_file(dir.join(stale));
+        }
+        std::fs::create_dir_all(dir).map_err(|e| {
+            Error::io(
+                format!("cannot create output directory {}", dir.display()),
+                e,
+            )
+        })?;
+        let sum_path = dir.join("summary.json");
+        reserve_summary(&sum_path)
+            .map_err(|e| Error::io(format!("cannot write {}", sum_path.display()), e))?;
+        Ok(FileSink {
+            dir: dir.to_path_buf(),
+            batch: Vec::new(),
+            tx: None,
+            writer: None,
+        })
+    }
+
+    /// The output directory.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// Hand the current batch to the writer thread.
+    fn send(&mut self) -> Result<(), Error> {
+        let full = std::mem::replace(&mut self.batch, Vec::with_capacity(BATCH));
+        match &self.tx {
+            Some(tx) => tx
+                .send(full)
+                .map_err(|_| Error::Other("the output writer stopped".into())),
+            None => Ok(()),
+        }
+    }
+}
+
+impl SolutionSink for FileSink {
+    fn begin(&mut self, layout: &OutputLayout, files: &mut Vec<PathBuf>) -> Result<(), Error> {
+        files.push(self.dir.join("solution.nav"));
+        let mut writers: Vec<Box<dyn RecordWriter>> =
+            vec![Box::new(NavWriter::create(files.last().unwrap())?)];
+        if layout.imu_err {
+            files.push(self.dir.join("imu_err.txt"));
+            writers.push(Box::new(ImuErrWriter::create(files.last().unwrap())?));
+        }
+        if layout.std {
+            files.push(self.dir.join("std.txt"));
+            writers.push(Box::new(StdWriter::create(files.last().unwrap())?));
+        }
+        // With the integrity monitor, solution.csv carries its flag column.
+        if layout.csv || layout.integrity {
+            files.push(self.dir.join("solution.csv"));
+            let w = CsvWriter::create(files.last().unwrap(), layout.std, layout.integrity);
+            writers.push(Box::new(w?));
+        }
+        let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<SolutionRecord>>(8);
+        self.writer = Some(std::thread::spawn(move || write_batches(writers, rx)));
+        self.tx = Some(tx);
+        self.batch = Vec::with_capacity(BATCH);
+        Ok(())
+    }
+
+    fn location(&self) -> String {
+        self.dir.display().to_string()
+    }
+
+    fn epoch(&mut self, record: &SolutionRecord) -> Result<(), Error> {
+        self.batch.push(*record);
+        if self.batch.len() == BATCH {
+            self.send()?;
+        }
+        Ok(())
+    }
+
+    fn end(&mut self) -> Result<(), Error> {
+        let sent = if self.batch.is_empty() {
+            Ok(())
+        } else {
+            self.send()
+        };
+        self.tx = None;
+        let Some(writer) = self.writer.take() else {
+            return sent;
+        };
+        let written = writer
+            .join()
+            .map_err(|_| Error::Other("the output writer panicked".into()))?;
+        // A failed writer (disk full, ...) is the real cause when the run stopped on it.
+        written.with_context(|| {
+            format!(
+                "writing the solution into {} (the files hold whole records up to where writing stopped)",
+                self.dir.display()
+            )
+        })?;
+        sent
+    }
+
+    fn report(&mut self, job: &mut JobResult, progress: bool) -> Result<(), Error> {
+        write_reports(&self.dir, job, progress)
+    }
+}
+
+/// The writer thread: every record of every batch to every writer, each batch flushed.
+fn write_batches(
+    mut writers: Vec<Box<dyn RecordWriter>>,
+    rx: std::sync::mpsc::Receiver<Vec<SolutionRecord>>,
+) -> Result<(), InputError> {
+    let mut failed = None;
+    'batches: for batch in rx {
+        for rec in &batch {
+            for w in writers.iter_mut() {
+                if let Err(e) = w.write_record(rec) {
+                    failed = Some(e);
+                    break 'batches;
+                }
+            }
+        }
+        for w in writers.iter_mut() {
+            if let Err(e) = w.flush() {
+                failed = Some(e);
+                break 'batches;
+            }
+        }
+    }
+    // Whatever happened, keep what was computed: flush every writer.
+    for w in writers {
+        if let Err(e) = w.finish_boxed() {
+            failed.get_or_insert(e);
+        }
+    }
+    failed.map_or(Ok(()), Err)
+}
+
+/// Write `events.log` (input notes, findings, the run's events, how it ended),
+/// `integrity.csv` (with the monitor) and `summary.json`, and list them in `job.files`.
+fn write_reports(out_dir: &Path, job: &mut JobResult, progress: bool) -> Result<(), Error> {
+    let ev_path = out_dir.join("events.log");
+    let mut text = String::new();
+    for n in &job.notes {
+        text.push_str(&format!("# input: {n}\n"));
+    }
+    // Errors are in the last line (how the run ended).
+    for f in job.findings.iter().filter(|f| !f.is_error()) {
+        text.push_str(&format!("# {f}\n"));
+    }
+    for e in &job.summary.events {
+        text.push_str(&format!("{e}\n"));
+    }
+    if let Some(e) = &job.error {
+        text.push_str(&format!("# {}: {e}\n", job.status));
+    }
+    let ev = std::fs::write(&ev_path, text)
+        .map_err(|e| Error::io(format!("cannot write {}", ev_path.display()), e));
+    if ev.is_ok() {
+        job.files.push(ev_path);
+    }
+    if job.integrity_table && job.status != "failed" {
+        let p = out_dir.join("integrity.csv");
+        let mut t = String::from("t_s,from,to,detector,statistic,threshold\n");
+        let mut spoofed = 0;
+        for e in &job.summary.events {
+            if let navfuse_core::Event::Integrity(tr) = e {
+                spoofed += usize::from(tr.to == navfuse_core::integrity::IntegrityState::Spoofed);
+                t.push_str(&format!(
+                    "{:.3},{},{},{},{:.4},{}\n",
+                    tr.t,
+                    tr.from.name(),
+                    tr.to.name(),
+                    tr.detector.name(),
+                    tr.statistic,
+                    if tr.threshold.is_finite() {
+                        format!("{:.4}", tr.threshold)
+                    } else {
+                        String::new()
+                    }
+                ));
+            }
+        }
+        std::fs::write(&p, t).map_err(|e| Error::io(format!("cannot write {}", p.display()), e))?;
+        job.files.push(p);
+        if progress && spoofed > 0 {
+            eprintln!(
+                "navfuse: GNSS integrity: declared spoofed {spoofed} time(s) (see integrity.csv)"
+            );
+        }
+    }
+    let sum_path = out_dir.join("summary.json");
+    job.files.push(sum_path.clone());
+    let full = serde_json::to_string_pretty(&job.to_json())? + "\n";
+    if let Err(e) = write_reserved(&sum_path, &full) {
+        // A full disk: the events list (also in events.log) may be what does not fit.
+        let mut short = job.to_json();
+        short["events"] = serde_json::json!(["(left out: the disk is full; see events.log)"]);
+        write_reserved(&sum_path, &(serde_json::to_string_pretty(&short)? + "\n"))
+            .map_err(|_| Error::io(format!("cannot write {}", sum_path.display()), e))?;
+    }
+    ev
+}
+
+/// Space kept for summary.json from the start of a run, so that a run that fills the
+/// disk can still say so.
+const SUMMARY_RESERVE: usize = 16 << 10;
+
+/// Write a placeholder summary (`"status": "running"`, padded with blanks to
+/// [`SUMMARY_RESERVE`] bytes): found after a crash, it says the run never ended.
+fn reserve_summary(path: &Path) -> std::io::Result<()> {
+    let mut s = String::from("{\n  \"status\": \"running\"\n}\n");
+    s.push_str(&" ".repeat(SUMMARY_RESERVE - s.len() - 1));
+    s.push('\n');
+    std::fs::write(path, s)
+}
+
+/// Overwrite `path` in place with `text` (into the blocks reserved by
+/// [`reserve_summary`]), then cut it to that length.
+fn write_reserved(path: &Path, text: &str) -> std::io::Result<()> {
+    let mut f = std::fs::OpenOptions::new()
+        .write(true)
+        .create(true)
+        .open(path)?;
+    f.write_all(text.as_bytes())?;
+    f.set_len(text.len() as u64)?;
+    f.sync_data().or(Ok(()))
+}

@@ -1,0 +1,43 @@
+//! navfuse-app: the complete `navfuse run` pipeline as a library. Read the inputs a
+//! [`RunConfig`] names (IMU, GNSS fixes or RINEX observations, odometer, heading), put
+//! them on one GPS week, check them ([`plausibility`]), estimate the GNSS-IMU time
+//! offset in a first pass when configured, navigate (`navfuse_core::run`), and push
+//! every output epoch into a [`SolutionSink`]: a [`FileSink`] writes the files of
+//! `navfuse run --out DIR` (byte for byte), a [`MemorySink`] keeps the records.
+//!
+//! ```no_run
+//! use navfuse_app::{config, run, MemorySink, RunOptions};
+//! let cfg = config::load("examples/drive_0708.toml".as_ref())?;
+//! let mut sink = MemorySink::new();
+//! let job = run(cfg, &mut sink, &RunOptions::default())?;
+//! println!("{} epochs; {}", sink.records.len(), job.summary_line());
+//! # Ok::<(), navfuse_app::Error>(())
+//! ```
+//!
+//! Map: [`job`](run) (status, reports) -> `navigate` (the run proper) -> `inputs`
+//! (reading, week alignment), [`gnss_input`] (RINEX), `time_offset` (the first pass),
+//! `checks` + [`plausibility`]; [`sink`](SolutionSink) and [`FileSink`] (the writer
+//! thread, events.log, integrity.csv, summary.json); [`JobResult`] (summary.json).
+
+mod checks;
+mod error;
+mod file_sink;
+pub mod gnss_input;
+mod inputs;
+mod job;
+mod navigate;
+pub mod plausibility;
+mod sink;
+mod stop;
+mod summary;
+mod time_offset;
+
+pub use error::Error;
+pub use file_sink::FileSink;
+pub use job::{run, run_job, run_job_opts, RunOptions};
+pub use navfuse_io::config::{self, RunConfig};
+pub use navfuse_io::nav::SolutionRecord;
+pub use sink::{MemorySink, OutputLayout, SolutionSink};
+pub use stop::{Interrupted, StopFlag};
+pub use summary::JobResult;
+pub use time_offset::TimeOffsetFit;

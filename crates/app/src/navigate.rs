@@ -1,0 +1,226 @@
+//! The run proper: read, check, estimate the time offset, navigate into the sink,
+//! check the result. The engine (time loop) is `navfuse_core::run`; this file wires
+//! the inputs and the sink to it.
+
+use crate::checks::{self, check, AfterRun};
+use crate::error::{Error, ResultExt};
+use crate::inputs::{self, split_week};
+use crate::plausibility::{self, Span};
+use crate::sink::{OutputLayout, SolutionSink};
+use crate::stop::Interrupted;
+use crate::summary::JobResult;
+use crate::{time_offset, RunOptions};
+use indicatif::{ProgressBar, ProgressStyle};
+use navfuse_core::{Navigator, RunSummary};
+use navfuse_io::config::RunConfig;
+use navfuse_io::nav::SolutionRecord;
+
+/// Read, check, navigate, push the solution into `sink`; fills `job` as it goes.
+pub(crate) fn navigate(
+    mut cfg: RunConfig,
+    sink: &mut dyn SolutionSink,
+    opts: &RunOptions,
+    job: &mut JobResult,
+) -> Result<(), Error> {
+    let warn = opts.warn;
+    let inputs::Inputs {
+        mut reader,
+        imu_week,
+        gnss_week,
+        week,
+        fixes,
+        raw,
+        gnss_skipped,
+        odometer,
+        heading,
+    } = inputs::read(&cfg, job, warn)?;
+    // GNSS epoch times (fixes, or raw epochs with tight coupling).
+    let gnss_times: Vec<f64> = fixes
+        .iter()
+        .map(|f| f.t)
+        .chain(raw.iter().map(|e| e.t))
+        .collect();
+    let last_gnss_t = gnss_times.last().copied();
+    let gnss_span = match (&cfg.gnss, gnss_times.first(), gnss_times.last()) {
+        (Some(g), Some(&first), Some(&last)) => Some(Span {
+            file: g.path.display().to_string(),
+            first,
+            last,
+            week: gnss_week,
+        }),
+        _ => None,
+    };
+    // GNSS epochs offered to the navigator: fixes, or raw epochs (tight coupling).
+    let gnss_epochs = fixes.len() + raw.len();
+    job.gnss_fixes = gnss_epochs;
+    job.odometer_samples = odometer.len();
+    job.heading_records = heading.len();
+    // Configuration and input checks before the run.
+    let found = checks::before_run(&cfg, gnss_epochs, gnss_skipped, last_gnss_t);
+    check(job, warn, found)?;
+    let measurements = navfuse_core::merge_raw_epochs(
+        navfuse_core::merge_measurements(&fixes, &odometer, &heading),
+        raw,
+    );
+
+    let first = match reader.next() {
+        Some(Ok(s)) => s,
+        Some(Err(e)) => return Err(e.into()),
+        None => {
+            return Err(Error::Other(format!(
+                "{}: no IMU samples: the file is empty or holds only headers/comments (check [imu] file and [imu.csv] skip_lines)",
+                cfg.imu.path.display()
+            )))
+        }
+    };
+    let first_t = first.t;
+    let imu_file = cfg.imu.path.display().to_string();
+    let imu_span = |last: f64| Span {
+        file: imu_file.clone(),
+        first: first_t,
+        last,
+        week: imu_week,
+    };
+    if let Some(g) = &gnss_span {
+        check(
+            job,
+            warn,
+            plausibility::time_overlap(&imu_span(f64::INFINITY), g),
+        )?;
+    }
+    let found = checks::imu_window(&cfg, fixes.first().map(|f| f.lla));
+    check(job, warn, found)?;
+    let run_start = if cfg.nav.start_time.is_finite() {
+        cfg.nav.start_time.max(first_t)
+    } else {
+        first_t
+    };
+    cfg.resolve_relative_outages(run_start);
+
+    let fit = time_offset::estimate(&mut cfg, &measurements, gnss_week, opts, job)?;
+    job.time_offset = fit;
+
+    let monitor_on = cfg.nav.integrity.enabled;
+    let layout = OutputLayout {
+        imu_err: cfg.output.imu_err,
+        std: cfg.output.std,
+        csv: cfg.output.csv,
+        integrity: monitor_on,
+    };
+    job.integrity_table = monitor_on;
+    sink.begin(&layout, &mut job.files)?;
+
+    let t_end = cfg.nav.end_time.or(last_gnss_t).unwrap_or(run_start);
+    let bar = (opts.progress && t_end > run_start).then(|| {
+        let b = ProgressBar::new(((t_end - run_start) * 10.0) as u64);
+        b.set_style(
+            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {msg}")
+                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        b
+    });
+
+    // A stop request ends the run at the next output epoch (the records so far are
+    // all in the sink), or before the first one at the next IMU sample.
+    let want_std = cfg.output.std;
+    let started = std::cell::Cell::new(false);
+    let mut stopped: Option<RunSummary> = None;
+    let mut last_out_t = None;
+    let result = navfuse_core::run(
+        &cfg.nav,
+        std::iter::once(Ok(first)).chain(reader.by_ref().map(|r| {
+            let r = r.map_err(Error::from);
+            if started.get() {
+                r
+            } else {
+                opts.stop_check(r)
+            }
+        })),
+        &measurements,
+        cfg.output.rate_hz.map(|r| 1.0 / r),
+        |n: &Navigator| {
+            started.set(true);
+            if let Some(signal) = opts.stop_requested() {
+                stopped = Some(n.summary().clone());
+                return Err(Interrupted {
+                    signal,
+                    t: last_out_t,
+                }
+                .into());
+            }
+            let nav = *n.nav();
+            let (wk, t) = split_week(week, n.time_gnss());
+            let rec = SolutionRecord {
+                gps_week: wk,
+                nav: navfuse_core::NavState { t, ..nav },
+                imu_errors: *n.imu_errors(),
+                std: if want_std { Some(n.std21()) } else { None },
+                gnss_integrity: monitor_on.then(|| n.integrity_state().flag()),
+            };
+            last_out_t = Some(n.time_gnss());
+            if let Err(e) = sink.epoch(&rec) {
+                stopped = Some(n.summary().clone());
+                return Err(e);
+            }
+            Ok(())
+        },
+        |t| {
+            if let Some(b) = &bar {
+                b.set_position(((t - run_start) * 10.0).max(0.0) as u64);
+                b.set_message(format!("t = {t:.1}"));
+            }
+        },
+    );
+    if let Some(b) = &bar {
+        b.finish_and_clear();
+    }
+    let ended = sink.end();
+    let report = reader.report().clone();
+    if !report.to_string().is_empty() {
+        job.notes.push(report.to_string());
+    }
+    if let Some(s) = stopped {
+        job.summary = s;
+        job.summary.outputs -= 1;
+    }
+    job.last_output_t = last_out_t;
+    ended?;
+    job.summary = result.map_err(|e| match e {
+        Error::Interrupted(i) => Error::Interrupted(i),
+        e => e.context(format!(
+            "run stopped; the output up to the failure is in {}",
+            sink.location()
+        )),
+    })?;
+    // After the run: results the program can tell are meaningless, and suspicious fits.
+    let imu_last = report.last_t.unwrap_or(first_t);
+    let after = AfterRun {
+        imu: imu_span(imu_last),
+        gnss: gnss_span.as_ref(),
+        gnss_times: &gnss_times,
+    };
+    let found = checks::after_run(&cfg, job, &after);
+    check(job, warn, found).with_context(|| {
+        format!(
+            "the run's result is meaningless (its output is kept in {})",
+            sink.location()
+        )
+    })?;
+    if opts.progress {
+        for n in &job.notes {
+            eprintln!("navfuse: note: {n}");
+        }
+        let rej = job
+            .summary
+            .events
+            .iter()
+            .filter(|e| matches!(e, navfuse_core::Event::Rejected { .. }))
+            .count();
+        if rej > 0 {
+            eprintln!(
+                "navfuse: {rej} GNSS/heading measurements rejected by the innovation gate (see events.log)"
+            );
+        }
+    }
+    Ok(())
+}

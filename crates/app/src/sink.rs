@@ -1,0 +1,92 @@
+//! [`SolutionSink`]: where the pipeline puts what it computes, in the spirit of
+//! ripgrep's `Sink`. The pipeline pushes every output epoch into the sink as it is
+//! computed, then hands it the finished run's report (events, findings, how it ended).
+//! [`FileSink`](crate::FileSink) writes the files of `navfuse run`; [`MemorySink`]
+//! keeps the records in a `Vec`.
+
+use crate::error::Error;
+use crate::summary::JobResult;
+use navfuse_core::Event;
+use navfuse_io::nav::SolutionRecord;
+use std::path::PathBuf;
+
+/// What the records of a run carry and which solution tables a file sink writes
+/// (from `[output]` and `[spoofing]`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct OutputLayout {
+    /// `[output] imu_err`: the KF-GINS IMU_ERR table.
+    pub imu_err: bool,
+    /// `[output] std`: records carry the 21 standard deviations (KF-GINS STD table).
+    pub std: bool,
+    /// `[output] csv`: the CSV table.
+    pub csv: bool,
+    /// The integrity monitor runs: records carry its flag; the CSV table (with the
+    /// flag column) and integrity.csv are written.
+    pub integrity: bool,
+}
+
+/// Receives a run's output. Calls, in order: [`begin`](Self::begin) once the inputs
+/// are read and checked (not at all when the run is refused before), then
+/// [`epoch`](Self::epoch) per output epoch, [`end`](Self::end) after the last one
+/// (also when the run stopped early), and [`report`](Self::report) once the run has
+/// ended, however it ended (also after a failure before `begin`).
+pub trait SolutionSink {
+    /// Get ready for records laid out as `layout`; push the paths of the files this
+    /// sink will write onto `files` (they appear in the summary).
+    fn begin(&mut self, layout: &OutputLayout, files: &mut Vec<PathBuf>) -> Result<(), Error>;
+
+    /// One output epoch. An error stops the run (the records so far are kept).
+    fn epoch(&mut self, record: &SolutionRecord) -> Result<(), Error>;
+
+    /// Where the output is kept, for messages: "its output is kept in LOCATION".
+    fn location(&self) -> String {
+        "memory".to_string()
+    }
+
+    /// After the last epoch: everything handed on. Called only after `begin`.
+    fn end(&mut self) -> Result<(), Error> {
+        Ok(())
+    }
+
+    /// The finished run (status, error, findings, notes, `summary.events`); a sink
+    /// that writes reports lists them in `job.files`. `progress`: the user watches
+    /// stderr (`navfuse run` without `-q`).
+    fn report(&mut self, job: &mut JobResult, progress: bool) -> Result<(), Error> {
+        let _ = (job, progress);
+        Ok(())
+    }
+}
+
+/// Keeps a run's output in memory: the records as computed and the run's events.
+#[derive(Clone, Debug, Default)]
+pub struct MemorySink {
+    /// The layout `begin` was given.
+    pub layout: OutputLayout,
+    /// Every output epoch, in order.
+    pub records: Vec<SolutionRecord>,
+    /// The run's events (as in events.log), set when the run has ended.
+    pub events: Vec<Event>,
+}
+
+impl MemorySink {
+    pub fn new() -> Self {
+        Self::default()
+    }
+}
+
+impl SolutionSink for MemorySink {
+    fn begin(&mut self, layout: &OutputLayout, _files: &mut Vec<PathBuf>) -> Result<(), Error> {
+        self.layout = *layout;
+        Ok(())
+    }
+
+    fn epoch(&mut self, record: &SolutionRecord) -> Result<(), Error> {
+        self.records.push(*record);
+        Ok(())
+    }
+
+    fn report(&mut self, job: &mut JobResult, _progress: bool) -> Result<(), Error> {
+        self.events = job.summary.events.clone();
+        Ok(())
+    }
+}

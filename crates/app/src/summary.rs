@@ -1,0 +1,154 @@
+//! [`JobResult`]: what a finished run reports (the counts, the time-offset fit, the
+//! findings, how it ended), as `summary.json` and as `navfuse run`'s summary line.
+
+use crate::plausibility::{self, Finding};
+use crate::time_offset::TimeOffsetFit;
+use navfuse_core::RunSummary;
+use std::path::PathBuf;
+use std::time::Duration;
+
+/// What a finished run reports.
+#[derive(Clone, Debug)]
+pub struct JobResult {
+    pub summary: RunSummary,
+    pub wall: Duration,
+    pub files: Vec<PathBuf>,
+    /// GNSS epochs read: fixes (loose) or raw epochs (tight).
+    pub gnss_fixes: usize,
+    /// Odometer samples and heading records read (0 when not configured).
+    pub odometer_samples: usize,
+    pub heading_records: usize,
+    pub time_offset: Option<TimeOffsetFit>,
+    /// How the run ended: "completed", "failed" or "interrupted" (summary.json).
+    pub status: &'static str,
+    /// Why it failed or stopped.
+    pub error: Option<String>,
+    /// Plausibility warnings and errors (plausibility.rs).
+    pub findings: Vec<Finding>,
+    /// Input facts (events.log `# input:` lines).
+    pub notes: Vec<String>,
+    /// The last output epoch written [s, GNSS time scale].
+    pub last_output_t: Option<f64>,
+    /// Write integrity.csv (the monitor ran).
+    pub(crate) integrity_table: bool,
+}
+
+impl JobResult {
+    pub(crate) fn empty() -> Self {
+        JobResult {
+            summary: RunSummary::default(),
+            wall: Duration::ZERO,
+            files: Vec::new(),
+            gnss_fixes: 0,
+            odometer_samples: 0,
+            heading_records: 0,
+            time_offset: None,
+            status: "running",
+            error: None,
+            findings: Vec::new(),
+            notes: Vec::new(),
+            last_output_t: None,
+            integrity_table: false,
+        }
+    }
+
+    /// The run summary as JSON (written to DIR/summary.json).
+    pub fn to_json(&self) -> serde_json::Value {
+        let s = &self.summary;
+        let with = |sev| {
+            self.findings
+                .iter()
+                .filter(|f| f.severity == sev)
+                .map(|f| f.message.clone())
+                .collect::<Vec<_>>()
+        };
+        serde_json::json!({
+            "status": self.status,
+            "error": self.error,
+            "warnings": with(plausibility::Severity::Warning),
+            "errors": with(plausibility::Severity::Error),
+            "last_output_t": self.last_output_t,
+            "imu_samples": s.imu_samples,
+            "t_first": s.first_t,
+            "t_last": s.last_t,
+            "wall_s": self.wall.as_secs_f64(),
+            "outputs": s.outputs,
+            "gnss": {
+                "fixes": self.gnss_fixes,
+                "used": s.gnss_used,
+                "rejected": s.gnss_rejected,
+                "in_outages": s.gnss_in_outage,
+                "before_start": s.gnss_before_start,
+            },
+            "time_offset": self.time_offset.map(|f| serde_json::json!({
+                "offset_s_at_start": f.tau0,
+                "offset_sigma_s_at_end": f.tau0_sd,
+                "rate_ppm": f.rate * 1e6,
+                "rate_sigma_ppm": f.rate_sd * 1e6,
+                "t_start": f.t0,
+            })),
+            "odometer_samples": self.odometer_samples,
+            "heading_records": self.heading_records,
+            "aiding_used": s.aiding_used,
+            "aiding_rejected": s.aiding_rejected,
+            "nis_per_row": s.aiding_nis.iter().map(|(k, (sum, rows))| (*k, sum / (*rows).max(1) as f64)).collect::<std::collections::BTreeMap<_, _>>(),
+            "static_s": s.static_s,
+            "odometer_scale": s.odometer_scale.map(|(k, sd)| serde_json::json!({
+                "k_ppm": k * 1e6,
+                "sd_ppm": sd * 1e6,
+            })),
+            "mounting": s.mounting.map(|(rpy, sd)| serde_json::json!({
+                "roll_deg": rpy.x.to_degrees(),
+                "pitch_deg": rpy.y.to_degrees(),
+                "yaw_deg": rpy.z.to_degrees(),
+                "sd_pitch_deg": sd[0].to_degrees(),
+                "sd_yaw_deg": sd[1].to_degrees(),
+            })),
+            "events": s.events.iter().map(|e| e.to_string()).collect::<Vec<_>>(),
+            "files": self.files.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
+        })
+    }
+
+    pub fn summary_line(&self) -> String {
+        let s = &self.summary;
+        let span = (s.last_t - s.first_t).max(0.0);
+        let speed = if self.wall.as_secs_f64() > 0.0 {
+            span / self.wall.as_secs_f64()
+        } else {
+            0.0
+        };
+        let mut line = format!(
+            "navfuse: {} IMU samples, t {:.3} .. {:.3} ({:.1} s of data) in {:.2} s ({:.0}x real time); GNSS {} of {} used, {} rejected, {} in outages",
+            s.imu_samples, s.first_t, s.last_t, span, self.wall.as_secs_f64(), speed,
+            s.gnss_used, self.gnss_fixes, s.gnss_rejected, s.gnss_in_outage
+        );
+        // Aiding other than GNSS position/velocity (counted above): used/rejected.
+        let aiding: Vec<String> = s
+            .aiding_used
+            .keys()
+            .chain(s.aiding_rejected.keys())
+            .filter(|k| !k.starts_with("gnss_"))
+            .collect::<std::collections::BTreeSet<_>>()
+            .into_iter()
+            .map(|k| {
+                let used = s.aiding_used.get(k).copied().unwrap_or(0);
+                match s.aiding_rejected.get(k).copied().unwrap_or(0) {
+                    0 => format!("{k} {used}"),
+                    r => format!("{k} {used} ({r} rejected)"),
+                }
+            })
+            .collect();
+        if !aiding.is_empty() {
+            line.push_str(&format!("; aiding {}", aiding.join(", ")));
+        }
+        if let Some(f) = &self.time_offset {
+            line.push_str(&format!(
+                "; GNSS-IMU time offset {:.4} s at t {:.1} (1-sigma {:.4}), rate {:.1} ppm (1-sigma {:.1}), estimated in a first pass; output times are GNSS time",
+                f.tau0, f.t0, f.tau0_sd, f.rate * 1e6, f.rate_sd * 1e6
+            ));
+        }
+        let names: Vec<String> = self.files.iter().map(|p| p.display().to_string()).collect();
+        line.push_str(&format!("; wrote {}", names.join(", ")));
+        line
+    }
+}
