@@ -2,37 +2,13 @@
 
 use anyhow::{bail, Context, Result};
 use nalgebra::Vector3;
-use navfuse_core::attitude::euler_from_q_bn;
 use navfuse_core::eval::{evaluate, EvalOptions, EvalReport, Stat, TrajPoint};
 use navfuse_core::outage::OutageSchedule;
+use navfuse_experiments::track::{load_nav, Track, WEEK_S};
 use navfuse_io::gnss::read_gnss;
 use navfuse_io::input::{GnssFormat, GnssSource};
-use navfuse_io::nav::read_nav;
 use serde_json::{json, Value};
 use std::path::Path;
-
-const WEEK_S: f64 = 604_800.0;
-
-/// A trajectory with its GPS week (0 = unknown, times are seconds of week).
-pub(crate) struct Track {
-    pub week: u32,
-    pub points: Vec<TrajPoint>,
-}
-
-pub(crate) fn load_nav(path: &Path) -> Result<Track> {
-    let rows = read_nav(path)?;
-    let week = rows.first().map_or(0, |r| r.0);
-    let points = rows
-        .iter()
-        .map(|(w, s)| TrajPoint {
-            t: s.t + (*w as f64 - week as f64) * WEEK_S,
-            lla: s.lla,
-            v_n: Some(s.v_n),
-            rpy: Some(euler_from_q_bn(&s.q_bn)),
-        })
-        .collect();
-    Ok(Track { week, points })
-}
 
 fn load_pos(path: &Path, quality: Vec<u8>) -> Result<Track> {
     let src = GnssSource {

@@ -1,12 +1,9 @@
-//! `navfuse`: the command line. Subcommands live in their own files:
-//! `run_cmd` (the navigator over files, a thin call into `navfuse_app`), `eval_cmd`
-//! (scoring), `bench_cmd` and `bench_tight` (speed, loose and tight coupling),
-//! `sim_cmd` (the simulator), `reproduce_cmd` (the papers' experiments).
+//! `navfuse`: the command line: clap, and one call per subcommand. `run_cmd` (the
+//! navigator over files, a thin call into `navfuse_app`), `eval_cmd` (scoring a
+//! solution file), `sim_cmd` (the simulator); `reproduce` (the papers' experiments)
+//! and `bench` (speed, loose and tight coupling) are `navfuse_experiments`.
 
-mod bench_cmd;
-mod bench_tight;
 mod eval_cmd;
-mod reproduce_cmd;
 mod run_cmd;
 mod sim_cmd;
 
@@ -204,7 +201,7 @@ enum Command {
         tight: bool,
         /// With --tight: seconds of data to simulate and navigate (at most the
         /// scenario's length, 1880 s for the built-in one).
-        #[arg(long, value_name = "N", requires = "tight", default_value_t = bench_tight::DEFAULT_DURATION_S)]
+        #[arg(long, value_name = "N", requires = "tight", default_value_t = navfuse_experiments::BENCH_TIGHT_DEFAULT_DURATION_S)]
         duration_s: f64,
         /// With --tight: another scenario file (with raw GNSS; the
         /// [[segment]] tables last) in place of the built-in one.
@@ -254,18 +251,17 @@ fn main() -> ExitCode {
             attack,
             jump_runs,
             clean_hours,
-        } => {
-            if attack || jump_runs > 0 || clean_hours != 0.0 {
-                let req = reproduce_cmd::attack::AttackRequest {
-                    attack,
-                    jump_runs,
-                    clean_hours,
-                };
-                reproduce_cmd::attack::main(&experiment, req, seeds, first_seed, json, keep, quiet)
-            } else {
-                reproduce_cmd::main(&experiment, seeds, first_seed, json, keep, quiet)
-            }
-        }
+        } => navfuse_experiments::reproduce(&navfuse_experiments::ReproduceArgs {
+            experiment,
+            seeds,
+            first_seed,
+            json,
+            keep,
+            quiet,
+            attack,
+            jump_runs,
+            clean_hours,
+        }),
         Command::Bench {
             kf_gins,
             tight,
@@ -273,13 +269,14 @@ fn main() -> ExitCode {
             scenario,
             repeat,
             json,
-        } => {
-            if tight {
-                bench_tight::main(scenario, duration_s, repeat, json)
-            } else {
-                bench_cmd::main(kf_gins, repeat, json)
-            }
-        }
+        } => navfuse_experiments::bench(&navfuse_experiments::BenchArgs {
+            kf_gins,
+            tight,
+            duration_s,
+            scenario,
+            repeat,
+            json,
+        }),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

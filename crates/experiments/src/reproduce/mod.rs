@@ -19,19 +19,15 @@ use navfuse_sim::imu_model::ImuGrade;
 use navfuse_sim::scenario::Scenario;
 use serde_json::{json, Value};
 
-use crate::eval_cmd::load_nav;
+use crate::track::load_nav;
 use navfuse_app::run_job;
 
-/// `reproduce seed004 --attack / --jump-runs / --clean-hours` (spoofing, issue 6).
-#[path = "reproduce_attack.rs"]
-pub mod attack;
-
 /// One navigator configuration of an experiment.
-struct Variant {
-    name: &'static str,
+pub(crate) struct Variant {
+    pub name: &'static str,
     /// What it adds, for the table.
-    label: &'static str,
-    apply: fn(&mut RunConfig, &Scenario),
+    pub label: &'static str,
+    pub apply: fn(&mut RunConfig, &Scenario),
 }
 
 /// A figure the paper reports, for the side-by-side table.
@@ -172,7 +168,7 @@ fn vehicle_installation(cfg: &mut RunConfig, sc: &Scenario) {
 
 /// Start as a user would: position from the first fix, attitude from alignment
 /// (static levelling + first GNSS course), realistic initial uncertainty.
-fn user_start(cfg: &mut RunConfig, sc: &Scenario) {
+pub(crate) fn user_start(cfg: &mut RunConfig, sc: &Scenario) {
     realistic_noise(cfg, &sc.imu_grade);
     // The simulator's run.toml uses every sensor it wrote; each variant adds its own.
     cfg.heading = None;
@@ -215,7 +211,10 @@ fn seed001() -> Experiment {
         id: "seed001",
         title: "Seed 001: car, ADIS16405 50 Hz + GNSS 1 Hz, loose EKF vs + heading from GNSS",
         scenario_name: "scenarios/seed001_car.toml",
-        scenario_text: include_str!("../../../scenarios/seed001_car.toml"),
+        scenario_text: include_str!(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../scenarios/seed001_car.toml"
+        )),
         variants: vec![
             Variant {
                 name: "loose",
@@ -280,7 +279,7 @@ fn seed002() -> Experiment {
         id: "seed002",
         title: "Seed 002: car, ADIS16405 50 Hz + GNSS 1 Hz with 30 s and 60 s outages, loose EKF vs + NHC",
         scenario_name: "scenarios/seed002_car.toml",
-        scenario_text: include_str!("../../../scenarios/seed002_car.toml"),
+        scenario_text: include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenarios/seed002_car.toml")),
         variants: vec![
             Variant {
                 name: "loose",
@@ -336,7 +335,7 @@ fn seed002() -> Experiment {
 /// Seed 004 without GNSS: surveyed start position (the truth), static alignment by
 /// levelling and gyrocompassing (IMU500: 0.1 deg/h), zero-velocity updates while
 /// static.
-fn seed004_start(cfg: &mut RunConfig, sc: &Scenario) {
+pub(crate) fn seed004_start(cfg: &mut RunConfig, sc: &Scenario) {
     let lla = cfg.nav.initial.lla;
     user_start(cfg, sc);
     cfg.gnss = None;
@@ -351,7 +350,7 @@ fn seed004_start(cfg: &mut RunConfig, sc: &Scenario) {
 
 /// The odometer as seed 004 uses it: pulses with K_OD, scale-factor and mounting
 /// states, and v^m = [v 0 0] (the NHC rows) in one update (seed 004 eq. 1-7).
-fn seed004_odometer(cfg: &mut RunConfig, sc: &Scenario) {
+pub(crate) fn seed004_odometer(cfg: &mut RunConfig, sc: &Scenario) {
     let k_od = sc
         .file
         .odometer
@@ -381,7 +380,10 @@ fn seed004() -> Experiment {
         id: "seed004",
         title: "Seed 004: car, IMU500 + odometer, no GNSS, 3010 m closed loop",
         scenario_name: "scenarios/seed004_loop.toml",
-        scenario_text: include_str!("../../../scenarios/seed004_loop.toml"),
+        scenario_text: include_str!(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../scenarios/seed004_loop.toml"
+        )),
         variants: vec![
             Variant {
                 name: "ins",
@@ -531,7 +533,7 @@ fn seed000() -> Experiment {
         id: "seed000",
         title: "Seed 000: UAV, HG1700 100 Hz + GPS 1 Hz (Table 3 satellites, Table 1 errors with SA), loose vs tight vs tight + TDCP + DGPS",
         scenario_name: "scenarios/seed000_uav.toml",
-        scenario_text: include_str!("../../../scenarios/seed000_uav.toml"),
+        scenario_text: include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenarios/seed000_uav.toml")),
         variants: vec![
             v("ins", "INS only", |c, sc| {
                 seed000_start(c, sc);
@@ -702,7 +704,7 @@ fn run_experiment(ex: &Experiment, seeds: &[u64], work: &Path, quiet: bool) -> R
 }
 
 /// Mean, min and max over seeds.
-fn spread(xs: &[f64]) -> (f64, f64, f64) {
+pub(crate) fn spread(xs: &[f64]) -> (f64, f64, f64) {
     let mean = xs.iter().sum::<f64>() / xs.len().max(1) as f64;
     let min = xs.iter().copied().fold(f64::INFINITY, f64::min);
     let max = xs.iter().copied().fold(f64::NEG_INFINITY, f64::max);

@@ -6,6 +6,8 @@
 //!    (reset between runs through /proc/self/clear_refs): it must not grow with length.
 //! 3. The core filter loop alone on samples already in memory: IMU samples per second.
 
+pub mod tight;
+
 use anyhow::{Context, Result};
 use navfuse_app::run_job;
 use navfuse_io::config::load_kfgins_yaml;

@@ -36,14 +36,20 @@ use navfuse_sim::random::Stream;
 use navfuse_sim::scenario::Scenario;
 use serde_json::{json, Value};
 
-use super::{seed004_odometer, seed004_start, spread, user_start, Variant};
-use crate::eval_cmd::load_nav;
+use crate::reproduce::{seed004_odometer, seed004_start, spread, user_start, Variant};
+use crate::track::load_nav;
 use navfuse_app::run_job;
 
 const ATTACK_SCENARIO: &str = "scenarios/seed004_attack.toml";
-const ATTACK_TEXT: &str = include_str!("../../../scenarios/seed004_attack.toml");
+const ATTACK_TEXT: &str = include_str!(concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../scenarios/seed004_attack.toml"
+));
 const LOOP_SCENARIO: &str = "scenarios/seed004_loop.toml";
-const LOOP_TEXT: &str = include_str!("../../../scenarios/seed004_loop.toml");
+const LOOP_TEXT: &str = include_str!(concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../scenarios/seed004_loop.toml"
+));
 /// Worker threads (the target machine has two cores).
 const WORKERS: usize = 2;
 /// Window after the attack's end over which the recovery errors are taken [s].

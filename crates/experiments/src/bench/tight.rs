@@ -29,7 +29,10 @@ use std::time::Instant;
 
 /// The built-in scenario (editing the file changes the bench after a rebuild).
 const SCENARIO_NAME: &str = "scenarios/bench_tight_10sat.toml";
-const SCENARIO_TEXT: &str = include_str!("../../../scenarios/bench_tight_10sat.toml");
+const SCENARIO_TEXT: &str = include_str!(concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../scenarios/bench_tight_10sat.toml"
+));
 /// The requirement: satellites per epoch and real-time factor.
 pub const SATELLITES: f64 = 10.0;
 pub const REQUIRED_SPEEDUP: f64 = 500.0;

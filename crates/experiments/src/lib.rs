@@ -1,0 +1,106 @@
+//! navfuse-experiments: what `navfuse reproduce` and `navfuse bench` do, as a library.
+//!
+//! - [`reproduce`]: the papers' experiments on the simulator (SYSTEM.md §7): simulate
+//!   the experiment's scenario per seed, run every navigator variant on the same data
+//!   (`navfuse_app::run`), score it against the simulated truth, print the figures
+//!   beside the paper's. seed004 also has the spoofing experiments (`attack`: the
+//!   drift attack's variant table, jump attacks, false alarms on clean drives).
+//! - [`bench`]: speed and memory of the navigator, loose coupling on the KF-GINS
+//!   stand-in or tight coupling on a simulated drive.
+//!
+//! Map: `reproduce` (run, report) -> `reproduce::papers` (the experiments and their
+//! figures), `reproduce::setup` (the navigator configurations), `reproduce::metrics`;
+//! `attack` -> `attack::{variants, reaction, drift, jumps, clean}`; `bench`,
+//! `bench::tight`; [`track`] (trajectories to score).
+
+mod attack;
+mod bench;
+mod reproduce;
+pub mod track;
+
+use std::path::PathBuf;
+
+pub use anyhow::{Error, Result};
+
+/// What `navfuse reproduce` was asked for.
+#[derive(Clone, Debug)]
+pub struct ReproduceArgs {
+    /// seed000, seed001, seed002 or seed004.
+    pub experiment: String,
+    /// Number of random seeds.
+    pub seeds: u64,
+    /// First seed (seeds are consecutive).
+    pub first_seed: u64,
+    /// Print JSON instead of the text tables.
+    pub json: bool,
+    /// Keep the simulated data and the solutions in this directory.
+    pub keep: Option<PathBuf>,
+    /// No per-run progress lines on stderr.
+    pub quiet: bool,
+    /// seed004: the drift attack's variant table.
+    pub attack: bool,
+    /// seed004: runs of the jump-attack Monte Carlo (0 = none).
+    pub jump_runs: usize,
+    /// seed004: hours of clean driving for the false-alarm count (0 = none).
+    pub clean_hours: f64,
+}
+
+/// `navfuse reproduce`: the plain experiment, or with `attack`, `jump_runs` or
+/// `clean_hours` (seed004 only) the spoofing ones. Prints the result on stdout.
+pub fn reproduce(a: &ReproduceArgs) -> Result<()> {
+    if a.attack || a.jump_runs > 0 || a.clean_hours != 0.0 {
+        let req = attack::AttackRequest {
+            attack: a.attack,
+            jump_runs: a.jump_runs,
+            clean_hours: a.clean_hours,
+        };
+        attack::main(
+            &a.experiment,
+            req,
+            a.seeds,
+            a.first_seed,
+            a.json,
+            a.keep.clone(),
+            a.quiet,
+        )
+    } else {
+        reproduce::main(
+            &a.experiment,
+            a.seeds,
+            a.first_seed,
+            a.json,
+            a.keep.clone(),
+            a.quiet,
+        )
+    }
+}
+
+/// What `navfuse bench` was asked for.
+#[derive(Clone, Debug)]
+pub struct BenchArgs {
+    /// KF-GINS YAML for the loose full run (default: the stand-in in ../shared/data).
+    pub kf_gins: Option<PathBuf>,
+    /// Tight coupling on simulated data instead.
+    pub tight: bool,
+    /// With `tight`: seconds of data to simulate and navigate.
+    pub duration_s: f64,
+    /// With `tight`: a scenario file in place of the built-in one.
+    pub scenario: Option<PathBuf>,
+    /// Repetitions of each measurement (the best is reported).
+    pub repeat: usize,
+    /// Print JSON.
+    pub json: bool,
+}
+
+/// With `tight`: the default of [`BenchArgs::duration_s`] [s].
+pub const BENCH_TIGHT_DEFAULT_DURATION_S: f64 = bench::tight::DEFAULT_DURATION_S;
+
+/// `navfuse bench`: loose coupling on the KF-GINS stand-in, or with `tight` tight
+/// coupling on a simulated drive. Prints the figures on stdout.
+pub fn bench(a: &BenchArgs) -> Result<()> {
+    if a.tight {
+        bench::tight::main(a.scenario.clone(), a.duration_s, a.repeat, a.json)
+    } else {
+        bench::main(a.kf_gins.clone(), a.repeat, a.json)
+    }
+}
