@@ -1,0 +1,404 @@
+//! `--attack`: the drift attack on scenarios/seed004_attack.toml, every variant on
+//! the same data per seed, and its tables.
+
+use std::path::Path;
+
+use anyhow::{anyhow, Context, Result};
+use navfuse_core::eval::{evaluate, EvalOptions};
+use navfuse_core::integrity::IntegrityState;
+use navfuse_core::outage::Window;
+use serde_json::{json, Value};
+
+use super::reaction::{nan_or, reaction, transition_rows};
+use super::variants::{attack_window_rel, variants};
+use super::{navigate, simulate, AFTER_S, ATTACK_SCENARIO, ATTACK_TEXT};
+use crate::reproduce::{spread, Variant};
+use crate::track::load_nav;
+
+/// The rows of the attack table: (key, label, decimals). Counts have 1 decimal (a
+/// mean over seeds).
+pub(super) const ROWS: [(&str, &str, usize); 11] = [
+    (
+        "alarms_before",
+        "alarms before the attack (out of trusted)",
+        1,
+    ),
+    ("spoofed_before", "declared spoofed before the attack", 1),
+    ("delay_s", "detection delay after the attack start [s]", 1),
+    ("spoofed_delay_s", "declared spoofed after [s]", 1),
+    ("readmitted_during", "GNSS re-admitted during the attack", 1),
+    (
+        "trusted_after_end_s",
+        "trusted again after the attack end [s]",
+        1,
+    ),
+    ("max_h_attack_m", "max horizontal error, attack [m]", 2),
+    ("max_3d_attack_m", "max 3D error, attack [m]", 2),
+    ("max_h_after_m", "max horizontal error, 60 s after [m]", 2),
+    ("max_3d_after_m", "max 3D error, 60 s after [m]", 2),
+    ("rmse_3d_m", "3D RMSE over the run [m]", 2),
+];
+
+/// One variant on one seed.
+#[derive(Clone, Debug)]
+pub(super) struct VariantRun {
+    pub(super) monitor: bool,
+    /// ROWS values; NaN = not applicable / did not happen.
+    pub(super) values: Vec<(&'static str, f64)>,
+    pub(super) detector: Option<String>,
+    /// (t from the start, from, to, detector, statistic, threshold).
+    pub(super) transitions: Vec<(f64, String, String, String, f64, f64)>,
+}
+
+impl VariantRun {
+    fn get(&self, k: &str) -> f64 {
+        self.values
+            .iter()
+            .find(|(n, _)| *n == k)
+            .map_or(f64::NAN, |(_, v)| *v)
+    }
+}
+
+/// Seed 004's attack scenario with this seed: every variant.
+pub(super) fn attack_seed(
+    seed: u64,
+    work: &Path,
+    keep: bool,
+    quiet: bool,
+) -> Result<Vec<VariantRun>> {
+    let dir = work.join(format!("seed004_attack_seed{seed}"));
+    let (sc, _sim) = simulate(ATTACK_SCENARIO, ATTACK_TEXT.to_string(), seed, &dir)?;
+    let truth = load_nav(&dir.join("truth.nav"))?.points;
+    let t0 = sc.file.start.time_s;
+    let (a_rel, b_rel) =
+        attack_window_rel(&sc).ok_or_else(|| anyhow!("{ATTACK_SCENARIO}: no spoof event"))?;
+    let (a, b) = (t0 + a_rel, t0 + b_rel);
+    let mut runs = Vec::new();
+    for v in variants() {
+        let t_run = std::time::Instant::now();
+        let out = dir.join(v.name);
+        let (monitor, trs) = navigate(&dir, &sc, v.apply, &out)
+            .with_context(|| format!("seed004 --attack seed {seed}: variant {}", v.name))?;
+        let sol = load_nav(&out.join("solution.nav"))?.points;
+        let rep = evaluate(
+            &sol,
+            &truth,
+            &EvalOptions {
+                gaps: vec![
+                    Window { start: a, end: b },
+                    Window {
+                        start: b,
+                        end: b + AFTER_S,
+                    },
+                ],
+                ..EvalOptions::default()
+            },
+        );
+        let gap = |k: usize| rep.gaps.get(k);
+        let r = reaction(&trs, a, b);
+        let m = |x: Option<f64>| if monitor { nan_or(x) } else { f64::NAN };
+        let c = |x: usize| if monitor { x as f64 } else { f64::NAN };
+        let values = vec![
+            ("alarms_before", c(r.alarms_before)),
+            ("spoofed_before", c(r.spoofed_before)),
+            ("delay_s", m(r.delay_s)),
+            ("spoofed_delay_s", m(r.spoofed_delay_s)),
+            ("readmitted_during", c(r.readmitted_during)),
+            ("trusted_after_end_s", m(r.trusted_after_end_s)),
+            ("max_h_attack_m", nan_or(gap(0).map(|g| g.max_horizontal))),
+            ("max_3d_attack_m", nan_or(gap(0).map(|g| g.max_3d))),
+            ("max_h_after_m", nan_or(gap(1).map(|g| g.max_horizontal))),
+            ("max_3d_after_m", nan_or(gap(1).map(|g| g.max_3d))),
+            ("rmse_3d_m", rep.pos_3d.rms),
+        ];
+        let run = VariantRun {
+            monitor,
+            values,
+            detector: r.detector.clone(),
+            transitions: transition_rows(&trs, t0),
+        };
+        if !quiet {
+            let first_early = trs
+                .iter()
+                .find(|tr| tr.t < a && tr.from == IntegrityState::Trusted)
+                .map(|tr| format!(", first at {:.0} s ({})", tr.t - t0, tr.detector.name()))
+                .unwrap_or_default();
+            eprintln!(
+                "  seed004 --attack seed {seed} {:<17} {}; max H attack {:7.2} m, after {:7.2} m; 3D RMSE {:7.2} m ({:.2} s)",
+                v.name,
+                if monitor {
+                    format!(
+                        "alarms before {}{first_early}, detected {}",
+                        r.alarms_before,
+                        match (&r.delay_s, &r.detector) {
+                            (Some(d), Some(det)) => format!("after {d:.0} s by {det}"),
+                            _ => "never".into(),
+                        }
+                    )
+                } else {
+                    "no monitor".into()
+                },
+                run.get("max_h_attack_m"),
+                run.get("max_h_after_m"),
+                run.get("rmse_3d_m"),
+                t_run.elapsed().as_secs_f64()
+            );
+        }
+        runs.push(run);
+    }
+    if !keep {
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+    Ok(runs)
+}
+
+/// Per variant, per seed.
+pub(super) struct AttackResults {
+    pub(super) seeds: Vec<u64>,
+    pub(super) attack_rel: (f64, f64),
+    pub(super) per_variant: Vec<(Variant, Vec<VariantRun>)>,
+}
+
+impl AttackResults {
+    fn runs(&self, name: &str) -> &[VariantRun] {
+        self.per_variant
+            .iter()
+            .find(|(v, _)| v.name == name)
+            .map_or(&[], |(_, r)| r.as_slice())
+    }
+
+    fn finite(&self, name: &str, key: &str) -> Vec<f64> {
+        self.runs(name)
+            .iter()
+            .map(|r| r.get(key))
+            .filter(|x| x.is_finite())
+            .collect()
+    }
+}
+
+/// "mean [min, max]" of the finite values, "(k/n)" when some are missing, "-" when
+/// none is finite.
+pub(super) fn cell(xs: &[f64], n: usize, dec: usize) -> String {
+    if xs.is_empty() {
+        return if n == 0 {
+            "-".into()
+        } else {
+            format!("- (0/{n})")
+        };
+    }
+    let (mean, lo, hi) = spread(xs);
+    let mut s = if xs.len() == 1 || lo == hi {
+        format!("{mean:.dec$}")
+    } else {
+        format!("{mean:.dec$} [{lo:.dec$}, {hi:.dec$}]")
+    };
+    if xs.len() < n {
+        s.push_str(&format!(" ({}/{n})", xs.len()));
+    }
+    s
+}
+
+/// The detectors that detected, with counts: "window x3, chi2".
+pub(super) fn detectors(runs: &[VariantRun]) -> String {
+    let mut counts: Vec<(String, usize)> = Vec::new();
+    for d in runs.iter().filter_map(|r| r.detector.clone()) {
+        match counts.iter_mut().find(|(n, _)| *n == d) {
+            Some((_, k)) => *k += 1,
+            None => counts.push((d, 1)),
+        }
+    }
+    if counts.is_empty() {
+        return "-".into();
+    }
+    counts
+        .iter()
+        .map(|(d, k)| {
+            if *k > 1 {
+                format!("{d} x{k}")
+            } else {
+                d.clone()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The paper's statements (SYSTEM.md §7 seed 004 row; §5) and what we measured.
+pub(super) fn paper_lines(r: &AttackResults) -> Vec<(&'static str, String)> {
+    let n = r.seeds.len();
+    let c = |v: &str, k: &str, dec: usize| cell(&r.finite(v, k), n, dec);
+    let any = |v: &str, k: &str| {
+        r.runs(v)
+            .iter()
+            .filter(|x| x.get(k).is_finite() && x.get(k) > 0.0)
+            .count()
+    };
+    let detected = |v: &str| r.finite(v, "delay_s").len();
+    vec![
+        (
+            "§7: spoofed segment detected with R = 10 m",
+            format!(
+                "monitor_R: detected in {}/{n} seeds, after {} s ({}); alarms before the attack {}",
+                detected("monitor_R"),
+                c("monitor_R", "delay_s", 1),
+                detectors(r.runs("monitor_R")),
+                c("monitor_R", "alarms_before", 1)
+            ),
+        ),
+        (
+            "§7: ... and bridged by INS/odometer",
+            format!(
+                "max horizontal error during the attack: monitor_R {} m, monitor {} m, dead_reckoning {} m, no_monitor {} m",
+                c("monitor_R", "max_h_attack_m", 1),
+                c("monitor", "max_h_attack_m", 1),
+                c("dead_reckoning", "max_h_attack_m", 1),
+                c("no_monitor", "max_h_attack_m", 1)
+            ),
+        ),
+        (
+            "§7: after 6 min INS/odometer stays 3.1 m from GNSS (INS alone 72 m)",
+            format!(
+                "dead_reckoning over the {:.0} s attack: max horizontal {} m",
+                r.attack_rel.1 - r.attack_rel.0,
+                c("dead_reckoning", "max_h_attack_m", 1)
+            ),
+        ),
+        (
+            "§5: with INS alone, drift exceeds R before the attack and gives false alarms",
+            format!(
+                "ins_only_R: alarms before the attack {} (seeds with any: {}/{n}); detected {}/{n}",
+                c("ins_only_R", "alarms_before", 1),
+                any("ins_only_R", "alarms_before"),
+                detected("ins_only_R")
+            ),
+        ),
+        (
+            "§5: with the odometer the reference stays tight",
+            format!(
+                "monitor_R: alarms before the attack {} (seeds with any: {}/{n})",
+                c("monitor_R", "alarms_before", 1),
+                any("monitor_R", "alarms_before")
+            ),
+        ),
+        (
+            "§5: a chi-square test with the filter's covariance generalises R",
+            format!(
+                "ins_only_chi2: alarms before {} (seeds with any: {}/{n}), detected {}/{n} after {} s; monitor: alarms before {}, detected after {} s ({})",
+                c("ins_only_chi2", "alarms_before", 1),
+                any("ins_only_chi2", "alarms_before"),
+                detected("ins_only_chi2"),
+                c("ins_only_chi2", "delay_s", 1),
+                c("monitor", "alarms_before", 1),
+                c("monitor", "delay_s", 1),
+                detectors(r.runs("monitor"))
+            ),
+        ),
+    ]
+}
+
+pub(super) fn attack_text(r: &AttackResults) -> String {
+    let n = r.seeds.len();
+    let mut s = format!(
+        "Seed 004 spoofing: car, IMU500 + odometer + GNSS 1 Hz, two laps of the 3010 m loop; \
+drift attack 2 m/s east from {:.0} s to {:.0} s\n",
+        r.attack_rel.0, r.attack_rel.1
+    );
+    s.push_str(&format!(
+        "scenario {ATTACK_SCENARIO}, seeds {:?}; mean [min, max] over seeds, (k/n) = seeds where it happened; \
+alarm = a transition out of trusted\n\n",
+        r.seeds
+    ));
+    for (v, _) in &r.per_variant {
+        s.push_str(&format!("  {:<17} {}\n", v.name, v.label));
+    }
+    const W: usize = 25;
+    s.push_str(&format!("\n{:<44}", ""));
+    for (v, _) in &r.per_variant {
+        s.push_str(&format!(" {:>W$}", v.name));
+    }
+    s.push('\n');
+    for (key, label, dec) in ROWS {
+        s.push_str(&format!("{label:<44}"));
+        for (v, runs) in &r.per_variant {
+            let monitor = runs.iter().any(|x| x.monitor);
+            let txt = if !monitor && ROWS[..6].iter().any(|(k, _, _)| *k == key) {
+                "-".to_string()
+            } else {
+                cell(&r.finite(v.name, key), n, dec)
+            };
+            s.push_str(&format!(" {txt:>W$}"));
+        }
+        s.push('\n');
+        if key == "delay_s" {
+            s.push_str(&format!("{:<44}", "  detector"));
+            for (_, runs) in &r.per_variant {
+                s.push_str(&format!(" {:>W$}", detectors(runs)));
+            }
+            s.push('\n');
+        }
+    }
+    s.push_str("\npaper (SYSTEM.md §7 seed 004 row, §5) and ours:\n");
+    for (p, ours) in paper_lines(r) {
+        s.push_str(&format!("  {p}\n      ours: {ours}\n"));
+    }
+    s
+}
+
+pub(super) fn attack_json(r: &AttackResults) -> Value {
+    let variants: Vec<Value> = r
+        .per_variant
+        .iter()
+        .map(|(v, runs)| {
+            let mut metrics = serde_json::Map::new();
+            for (key, _, _) in ROWS {
+                let per_seed: Vec<Value> = runs
+                    .iter()
+                    .map(|x| {
+                        let y = x.get(key);
+                        if y.is_finite() {
+                            json!(y)
+                        } else {
+                            Value::Null
+                        }
+                    })
+                    .collect();
+                let xs = r.finite(v.name, key);
+                let (mean, min, max) = if xs.is_empty() {
+                    (f64::NAN, f64::NAN, f64::NAN)
+                } else {
+                    spread(&xs)
+                };
+                let num = |x: f64| if x.is_finite() { json!(x) } else { Value::Null };
+                metrics.insert(
+                    key.to_string(),
+                    json!({"mean": num(mean), "min": num(min), "max": num(max), "per_seed": per_seed}),
+                );
+            }
+            let per_seed_transitions: Vec<Value> = runs
+                .iter()
+                .map(|x| {
+                    Value::Array(
+                        x.transitions
+                            .iter()
+                            .map(|(t, from, to, d, st, th)| {
+                                json!({"t_s": t, "from": from, "to": to, "detector": d,
+                                       "statistic": st, "threshold": if th.is_finite() { json!(th) } else { Value::Null }})
+                            })
+                            .collect(),
+                    )
+                })
+                .collect();
+            json!({"name": v.name, "label": v.label, "monitor": runs.iter().any(|x| x.monitor),
+                   "detector_per_seed": runs.iter().map(|x| x.detector.clone()).collect::<Vec<_>>(),
+                   "metrics": metrics, "transitions_per_seed": per_seed_transitions})
+        })
+        .collect();
+    let paper: Vec<Value> = paper_lines(r)
+        .into_iter()
+        .map(|(p, o)| json!({"paper": p, "ours": o}))
+        .collect();
+    json!({"scenario": ATTACK_SCENARIO, "seeds": r.seeds,
+           "attack": {"mode": "drift", "velocity_mps": [0.0, 2.0, 0.0],
+                      "start_s": r.attack_rel.0, "end_s": r.attack_rel.1},
+           "variants": variants, "paper": paper})
+}
