@@ -15,8 +15,10 @@
 
 mod attack;
 mod bench;
+mod navigate;
 mod reproduce;
 pub mod track;
+mod work;
 
 use std::path::PathBuf;
 

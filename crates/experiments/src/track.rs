@@ -1,10 +1,13 @@
-//! Trajectories to score: a `.nav` file (the simulator's truth, a kept solution) as
-//! a [`Track`] of [`TrajPoint`]s.
+//! Trajectories to score: a `.nav` file (the simulator's truth, a kept solution) or a
+//! run's records in memory, as a [`Track`] of [`TrajPoint`]s.
 
 use anyhow::Result;
+use navfuse_app::SolutionRecord;
 use navfuse_core::attitude::euler_from_q_bn;
 use navfuse_core::eval::TrajPoint;
+use navfuse_core::NavState;
 use navfuse_io::nav::read_nav;
+use navfuse_io::nav_written::nav_as_written;
 use std::path::Path;
 
 /// Seconds in a GPS week.
@@ -16,18 +19,32 @@ pub struct Track {
     pub points: Vec<TrajPoint>,
 }
 
+impl Track {
+    /// Rows of (GPS week, state); times count from the first row's week.
+    fn of_rows(rows: impl IntoIterator<Item = (u32, NavState)>) -> Track {
+        let mut rows = rows.into_iter().peekable();
+        let week = rows.peek().map_or(0, |r| r.0);
+        let points = rows
+            .map(|(w, s)| TrajPoint {
+                t: s.t + (w as f64 - week as f64) * WEEK_S,
+                lla: s.lla,
+                v_n: Some(s.v_n),
+                rpy: Some(euler_from_q_bn(&s.q_bn)),
+            })
+            .collect();
+        Track { week, points }
+    }
+}
+
 /// Read a KF-GINS `.nav` file; times count from the first row's week.
 pub fn load_nav(path: &Path) -> Result<Track> {
-    let rows = read_nav(path)?;
-    let week = rows.first().map_or(0, |r| r.0);
-    let points = rows
-        .iter()
-        .map(|(w, s)| TrajPoint {
-            t: s.t + (*w as f64 - week as f64) * WEEK_S,
-            lla: s.lla,
-            v_n: Some(s.v_n),
-            rpy: Some(euler_from_q_bn(&s.q_bn)),
-        })
-        .collect();
-    Ok(Track { week, points })
+    Ok(Track::of_rows(read_nav(path)?))
+}
+
+/// A run's solution records as [`load_nav`] would give them back from the
+/// solution.nav the run writes: each value rounded to the file's 9 decimals
+/// ([`nav_as_written`]). `navfuse reproduce` scores this, in memory, so that its
+/// figures are the ones it gave when it scored the written file.
+pub fn solution_track(records: &[SolutionRecord]) -> Track {
+    Track::of_rows(records.iter().map(nav_as_written))
 }

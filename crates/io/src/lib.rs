@@ -10,6 +10,7 @@ pub mod heading;
 pub mod imu;
 pub mod input;
 pub mod nav;
+pub mod nav_written;
 pub mod odometer;
 pub mod rinex_nav;
 pub mod rinex_obs;

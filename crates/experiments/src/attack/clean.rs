@@ -1,7 +1,5 @@
 //! `--clean-hours H`: false alarms on clean drives.
 
-use std::path::Path;
-
 use anyhow::{Context, Result};
 use navfuse_core::eval::{evaluate, EvalOptions};
 use navfuse_core::integrity::IntegrityState;
@@ -11,9 +9,11 @@ use serde_json::{json, Value};
 
 use super::reaction::transition_rows;
 use super::variants::{monitor_defaults, odometer_nhc};
-use super::{load_tracks, navigate, simulate};
+use super::{navigate, simulate};
 use crate::reproduce::setup::user_start;
 use crate::reproduce::spread;
+use crate::track::load_nav;
+use crate::work::WorkDir;
 
 /// One lap of the seed 004 loop from a stop to a stop, then 20 s standing (a traffic
 /// light): about 332 s.
@@ -169,16 +169,22 @@ pub(super) fn clean_config(cfg: &mut RunConfig, sc: &Scenario) {
     monitor_defaults(cfg);
 }
 
-pub(super) fn clean_run(c: &CleanCase, work: &Path, keep: bool, quiet: bool) -> Result<CleanRun> {
-    let dir = work.join(format!("clean{:02}_seed{}", c.run, c.seed));
+pub(super) fn clean_run(c: &CleanCase, work: &WorkDir, quiet: bool) -> Result<CleanRun> {
+    let dir = work
+        .path()
+        .join(format!("clean{:02}_seed{}", c.run, c.seed));
     let t_wall = std::time::Instant::now();
     let name = "seed004 clean drive (built from scenarios/seed004_attack.toml)";
     let (sc, sim) = simulate(name, clean_text(c.seed, c.hours), c.seed, &dir)?;
     let t0 = sc.file.start.time_s;
     let out = dir.join("out");
-    let (_, trs) = navigate(&dir, &sc, clean_config, &out)
+    let run = navigate(&dir, &sc, clean_config, work, &out)
         .with_context(|| format!("clean run {} (seed {})", c.run, c.seed))?;
-    let (truth, sol) = load_tracks(&dir, &out)?;
+    let trs = run.transitions;
+    let (truth, sol) = (
+        load_nav(&dir.join("truth.nav"))?.points,
+        run.nav.track().points,
+    );
     let rep = evaluate(&sol, &truth, &EvalOptions::default());
     let run = CleanRun {
         case: c.clone(),
@@ -211,7 +217,7 @@ pub(super) fn clean_run(c: &CleanCase, work: &Path, keep: bool, quiet: bool) -> 
             t_wall.elapsed().as_secs_f64()
         );
     }
-    if !keep {
+    if !work.keep() {
         let _ = std::fs::remove_dir_all(&dir);
     }
     Ok(run)

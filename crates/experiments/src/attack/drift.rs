@@ -1,8 +1,6 @@
 //! `--attack`: the drift attack on scenarios/seed004_attack.toml, every variant on
 //! the same data per seed, and its tables.
 
-use std::path::Path;
-
 use anyhow::{anyhow, Context, Result};
 use navfuse_core::eval::{evaluate, EvalOptions};
 use navfuse_core::integrity::IntegrityState;
@@ -14,6 +12,7 @@ use super::variants::{attack_window_rel, variants};
 use super::{navigate, simulate, AFTER_S, ATTACK_SCENARIO, ATTACK_TEXT};
 use crate::reproduce::{spread, Variant};
 use crate::track::load_nav;
+use crate::work::WorkDir;
 
 /// The rows of the attack table: (key, label, decimals). Counts have 1 decimal (a
 /// mean over seeds).
@@ -60,13 +59,8 @@ impl VariantRun {
 }
 
 /// Seed 004's attack scenario with this seed: every variant.
-pub(super) fn attack_seed(
-    seed: u64,
-    work: &Path,
-    keep: bool,
-    quiet: bool,
-) -> Result<Vec<VariantRun>> {
-    let dir = work.join(format!("seed004_attack_seed{seed}"));
+pub(super) fn attack_seed(seed: u64, work: &WorkDir, quiet: bool) -> Result<Vec<VariantRun>> {
+    let dir = work.path().join(format!("seed004_attack_seed{seed}"));
     let (sc, _sim) = simulate(ATTACK_SCENARIO, ATTACK_TEXT.to_string(), seed, &dir)?;
     let truth = load_nav(&dir.join("truth.nav"))?.points;
     let t0 = sc.file.start.time_s;
@@ -77,9 +71,10 @@ pub(super) fn attack_seed(
     for v in variants() {
         let t_run = std::time::Instant::now();
         let out = dir.join(v.name);
-        let (monitor, trs) = navigate(&dir, &sc, v.apply, &out)
+        let run = navigate(&dir, &sc, v.apply, work, &out)
             .with_context(|| format!("seed004 --attack seed {seed}: variant {}", v.name))?;
-        let sol = load_nav(&out.join("solution.nav"))?.points;
+        let (monitor, trs) = (run.monitor, run.transitions);
+        let sol = run.nav.track().points;
         let rep = evaluate(
             &sol,
             &truth,
@@ -146,7 +141,7 @@ pub(super) fn attack_seed(
         }
         runs.push(run);
     }
-    if !keep {
+    if !work.keep() {
         let _ = std::fs::remove_dir_all(&dir);
     }
     Ok(runs)

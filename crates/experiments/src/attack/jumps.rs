@@ -1,7 +1,5 @@
 //! `--jump-runs N`: the jump-attack Monte Carlo on scenarios/seed004_loop.toml.
 
-use std::path::Path;
-
 use anyhow::{Context, Result};
 use navfuse_core::integrity::IntegrityState;
 use navfuse_io::config::RunConfig;
@@ -12,6 +10,7 @@ use serde_json::{json, Value};
 use super::reaction::reaction;
 use super::variants::{attack_start, monitor_defaults, odometer_nhc};
 use super::{navigate, simulate, LOOP_SCENARIO, LOOP_TEXT};
+use crate::work::WorkDir;
 
 /// A built-in scenario with `events` (`[[gnss.event]]` tables) in place of its one
 /// event and `seed` in the file (so that a kept scenario.toml is what was simulated).
@@ -71,13 +70,13 @@ pub(super) fn jump_cases(n: usize, first_seed: u64) -> Vec<JumpCase> {
         .collect()
 }
 
-pub(super) fn jump_run(c: &JumpCase, work: &Path, keep: bool, quiet: bool) -> Result<JumpRun> {
+pub(super) fn jump_run(c: &JumpCase, work: &WorkDir, quiet: bool) -> Result<JumpRun> {
     let end_s = c.start_s + 30.0;
     let ev = format!(
         "[[gnss.event]]\ntype = \"spoof\"\nmode = \"jump\"\nstart_s = {}\nend_s = {}\noffset_m = [{}, {}, {}]\n",
         c.start_s, end_s, c.offset_m[0], c.offset_m[1], c.offset_m[2]
     );
-    let dir = work.join(format!("jump{:03}_seed{}", c.run, c.seed));
+    let dir = work.path().join(format!("jump{:03}_seed{}", c.run, c.seed));
     let t_wall = std::time::Instant::now();
     let (sc, _sim) = simulate(
         LOOP_SCENARIO,
@@ -93,8 +92,9 @@ pub(super) fn jump_run(c: &JumpCase, work: &Path, keep: bool, quiet: bool) -> Re
         monitor_defaults(cfg);
         cfg.nav.end_time = Some(t0 + end_s + 2.0);
     };
-    let (_, trs) = navigate(&dir, &sc, apply, &dir.join("out"))
-        .with_context(|| format!("jump run {} (seed {})", c.run, c.seed))?;
+    let trs = navigate(&dir, &sc, apply, work, &dir.join("out"))
+        .with_context(|| format!("jump run {} (seed {})", c.run, c.seed))?
+        .transitions;
     let (a, b) = (t0 + c.start_s, t0 + end_s);
     let r = reaction(&trs, a, b);
     let early = trs
@@ -131,7 +131,7 @@ pub(super) fn jump_run(c: &JumpCase, work: &Path, keep: bool, quiet: bool) -> Re
             t_wall.elapsed().as_secs_f64()
         );
     }
-    if !keep {
+    if !work.keep() {
         let _ = std::fs::remove_dir_all(&dir);
     }
     Ok(run)

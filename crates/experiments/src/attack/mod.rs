@@ -3,10 +3,10 @@
 //!
 //! - `--attack`: `scenarios/seed004_attack.toml` (built in: two laps of the seed 004
 //!   loop, a 300 s drift attack at 2 m/s) simulated once per seed; every variant runs
-//!   on the same data (`navfuse_app::run_job`) and is scored against the truth: alarms
-//!   before the attack, detection delay and detector, maximum errors during the attack
-//!   and in the 60 s after it, 3D RMSE over the run; mean [min, max] over the seeds
-//!   beside the paper's statements.
+//!   on the same data (`navfuse_app::run`, in memory) and is scored against the
+//!   truth: alarms before the attack, detection delay and detector, maximum errors
+//!   during the attack and in the 60 s after it, 3D RMSE over the run; mean [min,
+//!   max] over the seeds beside the paper's statements.
 //! - `--jump-runs N`: N jump attacks on the same car (one lap, seed004_loop.toml) and
 //!   navigator as the `monitor` variant: random seed, direction uniform on the sphere,
 //!   magnitude 20-200 m, start uniform while the car moves; fraction detected within
@@ -16,8 +16,10 @@
 //!   drives of repeated loops with a stop each lap; transitions out of trusted and
 //!   entries to spoofed per 10 h.
 //!
-//! Runs go to two worker threads (the machine has two cores); each run's directory
-//! is removed once scored unless `--keep DIR`.
+//! Runs go to two worker threads (the machine has two cores). Each run's simulated
+//! data are written to its own directory and removed once scored; the navigator's
+//! output stays in memory. With `--keep DIR` both stay, the solutions as the files
+//! of `navfuse run`.
 
 mod clean;
 mod drift;
@@ -29,15 +31,15 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
-use anyhow::{anyhow, bail, Context, Result};
+use anyhow::{anyhow, bail, Result};
 use navfuse_core::integrity::Transition;
 use navfuse_io::config::RunConfig;
 use navfuse_sim::generate::generate;
 use navfuse_sim::scenario::Scenario;
 use serde_json::{json, Value};
 
-use crate::track::load_nav;
-use navfuse_app::run_job;
+use crate::navigate::Navigated;
+use crate::work::WorkDir;
 
 const ATTACK_SCENARIO: &str = "scenarios/seed004_attack.toml";
 const ATTACK_TEXT: &str = include_str!(concat!(
@@ -77,39 +79,37 @@ fn simulate(
     seed: u64,
     dir: &Path,
 ) -> Result<(Scenario, navfuse_sim::generate::SimSummary)> {
-    let mut sc = Scenario::from_text(Path::new(name), text).map_err(|e| anyhow!("{e}"))?;
+    let mut sc = Scenario::from_text(Path::new(name), text)?;
     sc.file.seed = seed;
-    let sim = generate(&sc, dir).map_err(|e| anyhow!("{e}"))?;
+    let sim = generate(&sc, dir)?;
     Ok((sc, sim))
 }
 
-/// Configure from the simulator's run.toml, run into `out`; whether the monitor ran,
-/// and its transitions.
+/// A run on simulated data: whether the monitor ran, its transitions, the run.
+struct AttackRun {
+    monitor: bool,
+    transitions: Vec<Transition>,
+    nav: Navigated,
+}
+
+/// Configure from the simulator's run.toml in `dir`, then `apply`, and run in memory
+/// (with `--keep`, also into `out`).
 fn navigate(
     dir: &Path,
     sc: &Scenario,
     apply: impl Fn(&mut RunConfig, &Scenario),
+    work: &WorkDir,
     out: &Path,
-) -> Result<(bool, Vec<Transition>)> {
-    let mut cfg = navfuse_io::config::load(&dir.join("run.toml")).map_err(|e| anyhow!("{e}"))?;
+) -> Result<AttackRun> {
+    let mut cfg = navfuse_io::config::load(&dir.join("run.toml"))?;
     apply(&mut cfg, sc);
     let monitor = cfg.nav.integrity.enabled;
-    let job = run_job(cfg, out, false)?;
-    Ok((monitor, transitions(&job.summary.events)))
-}
-
-/// The simulated truth and a run's solution.
-fn load_tracks(
-    dir: &Path,
-    out: &Path,
-) -> Result<(
-    Vec<navfuse_core::eval::TrajPoint>,
-    Vec<navfuse_core::eval::TrajPoint>,
-)> {
-    Ok((
-        load_nav(&dir.join("truth.nav"))?.points,
-        load_nav(&out.join("solution.nav"))?.points,
-    ))
+    let nav = crate::navigate::navigate(cfg, work.kept(out))?;
+    Ok(AttackRun {
+        monitor,
+        transitions: transitions(&nav.job.summary.events),
+        nav,
+    })
 }
 
 /// `f` over `items` on `WORKERS` threads, results in order; stops handing out work at
@@ -175,23 +175,15 @@ pub fn main(
     if req.attack && seeds == 0 {
         bail!("--seeds must be at least 1");
     }
-    let (work, temp) = match keep {
-        Some(d) => (d, false),
-        None => (
-            std::env::temp_dir().join(format!("navfuse-reproduce-attack-{}", std::process::id())),
-            true,
-        ),
-    };
-    std::fs::create_dir_all(&work).with_context(|| format!("{}: cannot create", work.display()))?;
+    let work = WorkDir::new(keep, "reproduce-attack")?;
     let result = (|| -> Result<(String, Value)> {
         let mut text = String::new();
         let mut out = serde_json::Map::new();
         out.insert("experiment".into(), json!("seed004"));
         if req.attack {
             let seed_list: Vec<u64> = (first_seed..first_seed + seeds).collect();
-            let per_seed = par_map(&seed_list, |&s| attack_seed(s, &work, !temp, quiet))?;
-            let sc0 = Scenario::from_text(Path::new(ATTACK_SCENARIO), ATTACK_TEXT.to_string())
-                .map_err(|e| anyhow!("{e}"))?;
+            let per_seed = par_map(&seed_list, |&s| attack_seed(s, &work, quiet))?;
+            let sc0 = Scenario::from_text(Path::new(ATTACK_SCENARIO), ATTACK_TEXT.to_string())?;
             let attack_rel = attack_window_rel(&sc0).unwrap_or((f64::NAN, f64::NAN));
             let per_variant = variants()
                 .into_iter()
@@ -208,7 +200,7 @@ pub fn main(
         }
         if req.jump_runs > 0 {
             let cases = jump_cases(req.jump_runs, first_seed);
-            let runs = par_map(&cases, |c| jump_run(c, &work, !temp, quiet))?;
+            let runs = par_map(&cases, |c| jump_run(c, &work, quiet))?;
             let v = jump_summary(&runs);
             if !text.is_empty() {
                 text.push('\n');
@@ -218,7 +210,7 @@ pub fn main(
         }
         if req.clean_hours > 0.0 {
             let cases = clean_cases(req.clean_hours, first_seed);
-            let runs = par_map(&cases, |c| clean_run(c, &work, !temp, quiet))?;
+            let runs = par_map(&cases, |c| clean_run(c, &work, quiet))?;
             let v = clean_summary(&runs);
             if !text.is_empty() {
                 text.push('\n');
@@ -228,9 +220,7 @@ pub fn main(
         }
         Ok((text, Value::Object(out)))
     })();
-    if temp {
-        let _ = std::fs::remove_dir_all(&work);
-    }
+    drop(work);
     let (text, v) = result?;
     if json_out {
         println!("{}", serde_json::to_string_pretty(&v)?);

@@ -1,11 +1,15 @@
 //! `navfuse reproduce SEED`: the papers' experiments on the simulator (SYSTEM.md §7).
 //!
 //! For each random seed: simulate the experiment's scenario (scenarios/*.toml, built
-//! into the binary), run every variant of the navigator on the same data with
-//! `navfuse_app::run_job`, score it against the simulated truth, and print the mean and
-//! spread over seeds beside the paper's figures. Improvements follow seed 002 eq. 18:
+//! into the binary) into the work directory, run every variant of the navigator on
+//! the same data with `navfuse_app::run` into memory ([`crate::navigate`]), score its
+//! records against the simulated truth, and print the mean and spread over seeds
+//! beside the paper's figures. Improvements follow seed 002 eq. 18:
 //! (RMSE_base - RMSE_variant) / RMSE_base.
-
+//!
+//! On disk: the simulated inputs and truth (a temporary directory, removed at the
+//! end; the navigator reads its inputs from files). The solutions are files only with
+//! `--keep DIR`.
 mod metrics;
 mod papers;
 mod report;
@@ -20,8 +24,9 @@ use navfuse_io::input::{GnssFormat, GnssSource};
 use navfuse_sim::generate::generate;
 use navfuse_sim::scenario::Scenario;
 
+use crate::navigate::navigate;
 use crate::track::load_nav;
-use navfuse_app::run_job;
+use crate::work::WorkDir;
 
 use metrics::{closed_loop_metrics, metrics_of, table4_metrics, Metrics};
 use papers::{experiment, GNSS_ONLY};
@@ -88,30 +93,30 @@ pub(crate) struct Results {
 pub(crate) fn run_experiment(
     ex: &Experiment,
     seeds: &[u64],
-    work: &Path,
+    work: &WorkDir,
     quiet: bool,
 ) -> Result<Results> {
     let mut per_variant: Vec<(&'static str, Vec<Metrics>)> =
         ex.variants.iter().map(|v| (v.name, Vec::new())).collect();
     for &seed in seeds {
-        let mut sc = Scenario::from_text(Path::new(ex.scenario_name), ex.scenario_text.to_string())
-            .map_err(|e| anyhow::anyhow!("{e}"))?;
+        let mut sc =
+            Scenario::from_text(Path::new(ex.scenario_name), ex.scenario_text.to_string())?;
         sc.file.seed = seed;
-        let dir = work.join(format!("{}_seed{seed}", ex.id));
-        let sim = generate(&sc, &dir).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let dir = work.path().join(format!("{}_seed{seed}", ex.id));
+        let sim = generate(&sc, &dir)?;
         let truth = load_nav(&dir.join("truth.nav"))?;
         for (k, v) in ex.variants.iter().enumerate() {
-            let mut cfg = navfuse_io::config::load(&dir.join("run.toml"))
-                .map_err(|e| anyhow::anyhow!("{e}"))?;
+            let mut cfg = navfuse_io::config::load(&dir.join("run.toml"))?;
             (v.apply)(&mut cfg, &sc);
             let out = dir.join(v.name);
             let t_run = std::time::Instant::now();
             let sol = if v.name == GNSS_ONLY {
                 gnss_only_track(&cfg)?
             } else {
-                run_job(cfg, &out, false)
-                    .with_context(|| format!("{} seed {seed}: variant {}", ex.id, v.name))?;
-                load_nav(&out.join("solution.nav"))?.points
+                navigate(cfg, work.kept(&out))
+                    .with_context(|| format!("{} seed {seed}: variant {}", ex.id, v.name))?
+                    .track()
+                    .points
             };
             let wall = t_run.elapsed();
             let rep = evaluate(&sol, &truth.points, &EvalOptions::default());
@@ -152,19 +157,8 @@ pub fn main(
         bail!("--seeds must be at least 1");
     }
     let seed_list: Vec<u64> = (first_seed..first_seed + seeds).collect();
-    let (work, temp) = match keep {
-        Some(d) => (d, false),
-        None => (
-            std::env::temp_dir().join(format!("navfuse-reproduce-{}-{}", id, std::process::id())),
-            true,
-        ),
-    };
-    std::fs::create_dir_all(&work).with_context(|| format!("{}: cannot create", work.display()))?;
-    let result = run_experiment(&ex, &seed_list, &work, quiet);
-    if temp {
-        let _ = std::fs::remove_dir_all(&work);
-    }
-    let r = result?;
+    let work = WorkDir::new(keep, &format!("reproduce-{id}"))?;
+    let r = run_experiment(&ex, &seed_list, &work, quiet)?;
     if json_out {
         println!("{}", serde_json::to_string_pretty(&to_json(&ex, &r))?);
     } else {
