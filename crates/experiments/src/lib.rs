@@ -17,6 +17,7 @@ mod attack;
 mod bench;
 mod navigate;
 mod reproduce;
+mod scenarios;
 pub mod track;
 mod work;
 

@@ -305,6 +305,17 @@ impl Scenario {
             field: None,
             message: e.message().trim().to_string(),
         })?;
+        Self::from_file(path, file, text)
+    }
+
+    /// Validate a scenario value, e.g. one loaded and then changed in code (segments,
+    /// events, seed). `text` becomes [`Scenario::text`] (the copy `generate` writes);
+    /// error messages take their line numbers from it.
+    pub fn from_file(
+        path: &Path,
+        file: ScenarioFile,
+        text: String,
+    ) -> Result<Scenario, InputError> {
         let s = &file.start;
         let [lat, lon, h] = s.position_deg_m;
         if !(lat.is_finite() && lat.abs() < 89.0 && lon.is_finite() && h.is_finite()) {

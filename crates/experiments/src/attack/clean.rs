@@ -12,124 +12,39 @@ use super::variants::{monitor_defaults, odometer_nhc};
 use super::{navigate, simulate};
 use crate::reproduce::setup::user_start;
 use crate::reproduce::spread;
+use crate::scenarios::{builtin, changed};
 use crate::track::load_nav;
 use crate::work::WorkDir;
 
-/// One lap of the seed 004 loop from a stop to a stop, then 20 s standing (a traffic
-/// light): about 332 s.
-pub(super) const LAP: &str = r#"
-[[segment]]
-type = "accelerate"
-accel_mps2 = 1.0
-to_speed_mps = 10
-ramp_s = 1
-
-[[segment]]
-type = "hold"
-duration_s = 87.1
-
-[[segment]]
-type = "turn"
-rate_dps = 9
-angle_deg = 90
-ramp_s = 2
-
-[[segment]]
-type = "hold"
-duration_s = 33.9
-
-[[segment]]
-type = "turn"
-rate_dps = 9
-angle_deg = 90
-ramp_s = 2
-
-[[segment]]
-type = "hold"
-duration_s = 87.1
-
-[[segment]]
-type = "turn"
-rate_dps = 9
-angle_deg = 90
-ramp_s = 2
-
-[[segment]]
-type = "hold"
-duration_s = 33.9
-
-[[segment]]
-type = "turn"
-rate_dps = 9
-angle_deg = 90
-ramp_s = 2
-
-[[segment]]
-type = "accelerate"
-accel_mps2 = -1.0
-to_speed_mps = 0
-ramp_s = 1
-
-[[segment]]
-type = "static"
-duration_s = 20
-"#;
+/// The clean drive's scenario (built in): 60 s standing, then one lap of the seed 004
+/// loop from a stop to a stop and 20 s standing (a traffic light).
+const CLEAN_SCENARIO: &str = "scenarios/seed004_clean.toml";
+const CLEAN_TEXT: &str = include_str!(concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../scenarios/seed004_clean.toml"
+));
+/// The lap's length [s] (about 332 s).
 pub(super) const LAP_S: f64 = 332.0;
 
 /// A clean drive of about `hours` (at least one lap): seed 004's car and GNSS with
 /// an ADIS16405 at 50 Hz (turn-on biases 180 deg/h and 5 mg, as seed 002's scenario:
-/// what is left after the start-up bias null), no attack.
-pub(super) fn clean_text(seed: u64, hours: f64) -> String {
+/// what is left after the start-up bias null), no attack: the built-in scenario with
+/// its lap (every segment after the first) repeated and `seed`.
+pub(super) fn clean_scenario(seed: u64, hours: f64) -> Result<Scenario> {
     let laps = (((hours * 3600.0 - 60.0) / LAP_S).ceil() as usize).max(1);
-    let mut s = format!(
-        r#"# Clean drive for the false-alarm count of `navfuse reproduce seed004 --clean-hours`:
-# seed 004's car, odometer and GNSS fixes (scenarios/seed004_attack.toml) with a MEMS IMU
-# (ADIS16405, 50 Hz, turn-on biases after the bias null as scenarios/seed002_car.toml),
-# {laps} laps of the loop with a 20 s stop after each, no attack.
-seed = {seed}
-description = "Clean drive, ADIS16405 + odometer + GNSS, {laps} laps"
-
-[start]
-gps_week = 2381
-time_s = 345600.0
-position_deg_m = [21.0285, 105.8542, 15.0]
-heading_deg = 0
-
-[vehicle]
-imu_mounting_deg = [0.0, 0.5, 0.5]
-imu_to_reference_m = [-0.8, 0.0, 0.3]
-
-[imu]
-grade = "adis16405"
-rate_hz = 50
-gyro_bias_degph = 180
-accel_bias_mg = 5
-
-[odometer]
-rate_hz = 10
-meters_per_pulse = 0.00324
-pulses_per_rev = 1024
-scale_error_ppm = 2000
-
-[gnss]
-rate_hz = 1
-antenna_lever_arm_m = [0.0, 0.0, -1.0]
-raw = false
-
-[gnss.fix]
-horizontal_std_m = 1.5
-vertical_std_m = 3.0
-corr_time_s = 30
-
-[[segment]]
-type = "static"
-duration_s = 60
-"#
-    );
+    let base = builtin(CLEAN_SCENARIO, CLEAN_TEXT)?;
+    let mut file = base.file.clone();
+    let lap = file.segments.split_off(1);
     for _ in 0..laps {
-        s.push_str(LAP);
+        file.segments.extend_from_slice(&lap);
     }
-    s
+    file.seed = seed;
+    file.description = format!("Clean drive, ADIS16405 + odometer + GNSS, {laps} laps");
+    changed(
+        &base,
+        file,
+        &format!("seed = {seed}, the lap driven {laps} times"),
+    )
 }
 
 #[derive(Clone, Debug)]
@@ -174,8 +89,8 @@ pub(super) fn clean_run(c: &CleanCase, work: &WorkDir, quiet: bool) -> Result<Cl
         .path()
         .join(format!("clean{:02}_seed{}", c.run, c.seed));
     let t_wall = std::time::Instant::now();
-    let name = "seed004 clean drive (built from scenarios/seed004_attack.toml)";
-    let (sc, sim) = simulate(name, clean_text(c.seed, c.hours), c.seed, &dir)?;
+    let sc = clean_scenario(c.seed, c.hours)?;
+    let sim = simulate(&sc, &dir)?;
     let t0 = sc.file.start.time_s;
     let out = dir.join("out");
     let run = navigate(&dir, &sc, clean_config, work, &out)

@@ -11,6 +11,7 @@ use super::reaction::{nan_or, reaction, transition_rows};
 use super::variants::{attack_window_rel, variants};
 use super::{navigate, simulate, AFTER_S, ATTACK_SCENARIO, ATTACK_TEXT};
 use crate::reproduce::{spread, Variant};
+use crate::scenarios::builtin;
 use crate::track::load_nav;
 use crate::work::WorkDir;
 
@@ -61,7 +62,9 @@ impl VariantRun {
 /// Seed 004's attack scenario with this seed: every variant.
 pub(super) fn attack_seed(seed: u64, work: &WorkDir, quiet: bool) -> Result<Vec<VariantRun>> {
     let dir = work.path().join(format!("seed004_attack_seed{seed}"));
-    let (sc, _sim) = simulate(ATTACK_SCENARIO, ATTACK_TEXT.to_string(), seed, &dir)?;
+    let mut sc = builtin(ATTACK_SCENARIO, ATTACK_TEXT)?;
+    sc.file.seed = seed;
+    simulate(&sc, &dir)?;
     let truth = load_nav(&dir.join("truth.nav"))?.points;
     let t0 = sc.file.start.time_s;
     let (a_rel, b_rel) =

@@ -3,6 +3,7 @@
 use anyhow::{Context, Result};
 use navfuse_core::integrity::IntegrityState;
 use navfuse_io::config::RunConfig;
+use navfuse_sim::gnss_sim::{EventSpec, SpoofMode};
 use navfuse_sim::random::Stream;
 use navfuse_sim::scenario::Scenario;
 use serde_json::{json, Value};
@@ -10,19 +11,32 @@ use serde_json::{json, Value};
 use super::reaction::reaction;
 use super::variants::{attack_start, monitor_defaults, odometer_nhc};
 use super::{navigate, simulate, LOOP_SCENARIO, LOOP_TEXT};
+use crate::scenarios::{builtin, changed};
 use crate::work::WorkDir;
 
-/// A built-in scenario with `events` (`[[gnss.event]]` tables) in place of its one
-/// event and `seed` in the file (so that a kept scenario.toml is what was simulated).
-pub(super) fn with_events(base: &str, seed: u64, events: &str) -> String {
-    let a = base
-        .find("[[gnss.event]]")
-        .expect("the scenario has an event");
-    let b = a + base[a..]
-        .find("\n\n")
-        .expect("a blank line after the event");
-    let text = format!("{}{events}{}", &base[..a], &base[b..]);
-    text.replacen("seed = 1\n", &format!("seed = {seed}\n"), 1)
+/// Seed 004's loop (built in) with this case's jump in place of its one GNSS event,
+/// and its seed.
+fn jump_scenario(c: &JumpCase, end_s: f64) -> Result<Scenario> {
+    let base = builtin(LOOP_SCENARIO, LOOP_TEXT)?;
+    let mut file = base.file.clone();
+    file.seed = c.seed;
+    let gnss = file
+        .gnss
+        .as_mut()
+        .with_context(|| format!("{LOOP_SCENARIO}: no [gnss]"))?;
+    gnss.events = vec![EventSpec::Spoof {
+        mode: SpoofMode::Jump,
+        start_s: c.start_s,
+        end_s,
+        offset_m: c.offset_m,
+        velocity_mps: [0.0; 3],
+        delay_s: 0.0,
+    }];
+    let change = format!(
+        "seed = {}; the [[gnss.event]] replaced by a jump spoof from {} s to {end_s} s, offset {:?} m",
+        c.seed, c.start_s, c.offset_m
+    );
+    changed(&base, file, &change)
 }
 
 /// One jump attack of the Monte Carlo.
@@ -72,18 +86,10 @@ pub(super) fn jump_cases(n: usize, first_seed: u64) -> Vec<JumpCase> {
 
 pub(super) fn jump_run(c: &JumpCase, work: &WorkDir, quiet: bool) -> Result<JumpRun> {
     let end_s = c.start_s + 30.0;
-    let ev = format!(
-        "[[gnss.event]]\ntype = \"spoof\"\nmode = \"jump\"\nstart_s = {}\nend_s = {}\noffset_m = [{}, {}, {}]\n",
-        c.start_s, end_s, c.offset_m[0], c.offset_m[1], c.offset_m[2]
-    );
     let dir = work.path().join(format!("jump{:03}_seed{}", c.run, c.seed));
     let t_wall = std::time::Instant::now();
-    let (sc, _sim) = simulate(
-        LOOP_SCENARIO,
-        with_events(LOOP_TEXT, c.seed, &ev),
-        c.seed,
-        &dir,
-    )?;
+    let sc = jump_scenario(c, end_s)?;
+    simulate(&sc, &dir)?;
     let t0 = sc.file.start.time_s;
     // The `monitor` variant, navigating until 2 s after the attack.
     let apply = |cfg: &mut RunConfig, sc: &Scenario| {

@@ -39,6 +39,7 @@ use navfuse_sim::scenario::Scenario;
 use serde_json::{json, Value};
 
 use crate::navigate::Navigated;
+use crate::scenarios::builtin;
 use crate::work::WorkDir;
 
 const ATTACK_SCENARIO: &str = "scenarios/seed004_attack.toml";
@@ -72,17 +73,9 @@ use jumps::{jump_cases, jump_run, jump_summary, jump_text};
 use reaction::transitions;
 use variants::{attack_window_rel, variants};
 
-/// Simulate `text` into `dir`.
-fn simulate(
-    name: &str,
-    text: String,
-    seed: u64,
-    dir: &Path,
-) -> Result<(Scenario, navfuse_sim::generate::SimSummary)> {
-    let mut sc = Scenario::from_text(Path::new(name), text)?;
-    sc.file.seed = seed;
-    let sim = generate(&sc, dir)?;
-    Ok((sc, sim))
+/// Simulate `sc` into `dir`.
+fn simulate(sc: &Scenario, dir: &Path) -> Result<navfuse_sim::generate::SimSummary> {
+    Ok(generate(sc, dir)?)
 }
 
 /// A run on simulated data: whether the monitor ran, its transitions, the run.
@@ -183,7 +176,7 @@ pub fn main(
         if req.attack {
             let seed_list: Vec<u64> = (first_seed..first_seed + seeds).collect();
             let per_seed = par_map(&seed_list, |&s| attack_seed(s, &work, quiet))?;
-            let sc0 = Scenario::from_text(Path::new(ATTACK_SCENARIO), ATTACK_TEXT.to_string())?;
+            let sc0 = builtin(ATTACK_SCENARIO, ATTACK_TEXT)?;
             let attack_rel = attack_window_rel(&sc0).unwrap_or((f64::NAN, f64::NAN));
             let per_variant = variants()
                 .into_iter()

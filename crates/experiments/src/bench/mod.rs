@@ -38,7 +38,7 @@ pub fn main(kf_gins: Option<PathBuf>, repeat: usize, json_out: bool) -> Result<(
             yaml.display()
         );
     }
-    let cfg = load_kfgins_yaml(&yaml).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let cfg = load_kfgins_yaml(&yaml)?;
     let tmp = std::env::temp_dir().join(format!("navfuse-bench-{}", std::process::id()));
     let repeat = repeat.max(1);
 
@@ -61,7 +61,7 @@ pub fn main(kf_gins: Option<PathBuf>, repeat: usize, json_out: bool) -> Result<(
             .gnss
             .as_ref()
             .context("the benchmark config needs a GNSS file")?;
-        let fixes = read_gnss(g).map_err(|e| anyhow::anyhow!("{e}"))?.fixes;
+        let fixes = read_gnss(g)?.fixes;
         let (a, b) = (cfg.nav.start_time.max(fixes[0].t), fixes[fixes.len() - 1].t);
         a + 0.25 * (b - a)
     };
@@ -72,12 +72,9 @@ pub fn main(kf_gins: Option<PathBuf>, repeat: usize, json_out: bool) -> Result<(
     let _ = std::fs::remove_dir_all(&tmp);
 
     // 3: the core loop on in-memory samples, no output.
-    let imu: Vec<_> = open_imu(&cfg.imu)
-        .map_err(|e| anyhow::anyhow!("{e}"))?
-        .collect::<Result<_, _>>()
-        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let imu: Vec<_> = open_imu(&cfg.imu)?.collect::<Result<_, _>>()?;
     let fixes = match &cfg.gnss {
-        Some(g) => read_gnss(g).map_err(|e| anyhow::anyhow!("{e}"))?.fixes,
+        Some(g) => read_gnss(g)?.fixes,
         None => Vec::new(),
     };
     let mut best_core = f64::INFINITY;

@@ -22,7 +22,9 @@ use navfuse_io::config::RunConfig;
 use navfuse_io::imu::open_imu;
 use navfuse_io::input::{Coupling, GnssFormat};
 use navfuse_sim::generate::generate;
-use navfuse_sim::scenario::Scenario;
+use navfuse_sim::scenario::{Scenario, SegmentSpec};
+
+use crate::scenarios::{builtin, changed};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -80,12 +82,10 @@ impl Counts {
     }
 }
 
-/// The scenario cut to `duration_s`: trailing `[[segment]]` tables are dropped and a
-/// `hold` (or `static`, when the vehicle stands) fills up to the duration. The
-/// segments must be the last tables of the file.
-fn cut_scenario(path: &Path, text: &str, duration_s: f64) -> Result<Scenario> {
-    let parse = |t: String| Scenario::from_text(path, t).map_err(|e| anyhow::anyhow!("{e}"));
-    let full = parse(text.to_string())?;
+/// The scenario cut to `duration_s`: trailing segments are dropped and a `hold` (or
+/// `static`, when the vehicle stands) fills up to the duration.
+fn cut_scenario(full: Scenario, duration_s: f64) -> Result<Scenario> {
+    let path = full.path.clone();
     let full_s = full.trajectory.duration();
     if duration_s > full_s + 1e-6 {
         bail!(
@@ -93,53 +93,39 @@ fn cut_scenario(path: &Path, text: &str, duration_s: f64) -> Result<Scenario> {
             path.display()
         );
     }
-    // Byte offsets of the `[[segment]]` headers; nothing but segments may follow the first.
-    let mut heads = Vec::new();
-    let mut pos = 0usize;
-    for line in text.split_inclusive('\n') {
-        let l = line.trim_start();
-        if l.starts_with("[[segment]]") {
-            heads.push(pos);
-        } else if !heads.is_empty() && l.starts_with('[') {
-            bail!(
-                "{}: the bench shortens a scenario by dropping trailing [[segment]] tables; put `{}` before the segments",
-                path.display(),
-                l.trim_end()
-            );
-        }
-        pos += line.len();
-    }
-    if heads.len() != full.file.segments.len() {
-        bail!(
-            "{}: cannot find the [[segment]] tables (write each as a `[[segment]]` line)",
-            path.display()
-        );
-    }
     if (full_s - duration_s).abs() < 1e-6 {
         return Ok(full);
     }
+    let with = |segments: &[SegmentSpec], change: &str| {
+        let mut file = full.file.clone();
+        file.segments = segments.to_vec();
+        changed(&full, file, change)
+    };
     // The longest prefix of whole segments that fits, then a filler.
+    let segments = &full.file.segments;
     let mut keep = 0usize;
     let mut kept_s = 0.0;
-    for k in 1..heads.len() {
-        let d = parse(text[..heads[k]].to_string())?.trajectory.duration();
+    for k in 1..segments.len() {
+        let d = with(&segments[..k], "")?.trajectory.duration();
         if d > duration_s + 1e-9 {
             break;
         }
         keep = k;
         kept_s = d;
     }
-    let prefix = &text[..heads.get(keep).copied().unwrap_or(text.len())];
+    let change = format!("navfuse bench: cut to {duration_s} s, the first {keep} segments");
     let rest = duration_s - kept_s;
     if rest < 1e-6 {
-        return parse(prefix.to_string());
+        return with(&segments[..keep], &change);
     }
     let mut last_err = None;
-    for kind in ["hold", "static"] {
-        let t = format!(
-            "{prefix}\n# navfuse bench: filler up to {duration_s} s\n[[segment]]\ntype = \"{kind}\"\nduration_s = {rest}\n"
-        );
-        match parse(t) {
+    for filler in [
+        SegmentSpec::Hold { duration_s: rest },
+        SegmentSpec::Static { duration_s: rest },
+    ] {
+        let mut cut = segments[..keep].to_vec();
+        cut.push(filler);
+        match with(&cut, &format!("{change} and a {rest} s filler")) {
             Ok(sc) => return Ok(sc),
             Err(e) => last_err = Some(e),
         }
@@ -152,7 +138,7 @@ fn cut_scenario(path: &Path, text: &str, duration_s: f64) -> Result<Scenario> {
 /// elevation mask and antenna lever arm.
 fn tight_config(dir: &Path) -> Result<RunConfig> {
     let p = dir.join("run.toml");
-    let cfg = navfuse_io::config::load(&p).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let cfg = navfuse_io::config::load(&p)?;
     let tight = matches!(
         cfg.gnss.as_ref().map(|g| &g.format),
         Some(GnssFormat::Rinex(r)) if r.coupling == Coupling::Tight
@@ -176,14 +162,12 @@ pub fn main(
     if !(duration_s.is_finite() && duration_s >= 10.0) {
         bail!("--duration-s: expected at least 10 s, got {duration_s}");
     }
-    let (path, text) = match &scenario {
-        Some(p) => (
-            p.clone(),
-            std::fs::read_to_string(p).with_context(|| format!("{}: cannot read", p.display()))?,
-        ),
-        None => (PathBuf::from(SCENARIO_NAME), SCENARIO_TEXT.to_string()),
+    let full = match &scenario {
+        Some(p) => Scenario::load(p)?,
+        None => builtin(SCENARIO_NAME, SCENARIO_TEXT)?,
     };
-    let sc = cut_scenario(&path, &text, duration_s)?;
+    let path = full.path.clone();
+    let sc = cut_scenario(full, duration_s)?;
     let gnss_hz = sc.file.gnss.as_ref().map_or(0.0, |g| g.rate_hz);
     let scratch =
         Scratch(std::env::temp_dir().join(format!("navfuse-bench-tight-{}", std::process::id())));
@@ -192,11 +176,10 @@ pub fn main(
 
     // 1. Simulate (not timed) and count the satellites.
     let t_sim = Instant::now();
-    let sim = generate(&sc, &sim_dir).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let sim = generate(&sc, &sim_dir)?;
     let sim_s = t_sim.elapsed().as_secs_f64();
     let cfg = tight_config(&sim_dir)?;
-    let obs = navfuse_io::rinex_obs::read_rinex_obs(&sim_dir.join("obs.rnx"))
-        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let obs = navfuse_io::rinex_obs::read_rinex_obs(&sim_dir.join("obs.rnx"))?;
     let in_file = Counts::of(obs.iter().map(|e| e.sats.len()));
     drop(obs);
     if in_file.epochs == 0 || in_file.mean < SATELLITES - 1e-9 {
@@ -264,10 +247,7 @@ pub fn main(
     let gnss_epochs = s.gnss_used.max(1);
 
     // 3b. The core loop on samples and prepared epochs in memory, no output.
-    let imu: Vec<_> = open_imu(&cfg.imu)
-        .map_err(|e| anyhow::anyhow!("{e}"))?
-        .collect::<Result<_, _>>()
-        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let imu: Vec<_> = open_imu(&cfg.imu)?.collect::<Result<_, _>>()?;
     let measurements = navfuse_core::merge_raw_epochs(Vec::new(), raw);
     let mut best_core = f64::INFINITY;
     let mut core = None;
