@@ -143,8 +143,9 @@ enum Command {
         /// Machine-readable output.
         #[arg(long)]
         json: bool,
-        /// Keep the simulated data and the solutions in DIR (default: a temporary
-        /// directory, removed at the end).
+        /// Keep the simulated data and the solutions (the files of `navfuse run`) in
+        /// DIR. Default: the simulated data go to a temporary directory, removed at
+        /// the end, and the solutions are scored in memory, not written.
         #[arg(long, value_name = "DIR")]
         keep: Option<PathBuf>,
         /// No per-run progress lines on stderr.
@@ -203,8 +204,8 @@ enum Command {
         /// scenario's length, 1880 s for the built-in one).
         #[arg(long, value_name = "N", requires = "tight", default_value_t = navfuse_experiments::BENCH_TIGHT_DEFAULT_DURATION_S)]
         duration_s: f64,
-        /// With --tight: another scenario file (with raw GNSS; the
-        /// [[segment]] tables last) in place of the built-in one.
+        /// With --tight: another scenario file (with raw GNSS) in place of the
+        /// built-in one.
         #[arg(long, value_name = "FILE.toml", requires = "tight")]
         scenario: Option<PathBuf>,
         /// Repetitions of each measurement (the best is reported).
