@@ -197,3 +197,24 @@ pub(super) fn clean_text_report(runs: &[CleanRun], v: &Value) -> String {
     }
     s
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn one_hour_drive_repeats_the_lap() {
+        let one = clean_scenario(7, 0.1).unwrap();
+        let lap = one.file.segments.len() - 1;
+        assert_eq!(one.file.seed, 7);
+        let hour = clean_scenario(7, 1.0).unwrap();
+        let laps = ((3600.0 - 60.0) / LAP_S).ceil() as usize;
+        assert_eq!(hour.file.segments.len(), 1 + laps * lap);
+        let (d1, dh) = (one.trajectory.duration(), hour.trajectory.duration());
+        assert!(
+            (dh - 60.0 - laps as f64 * (d1 - 60.0)).abs() < 1e-6,
+            "{d1} {dh}"
+        );
+        assert!((d1 - 60.0 - LAP_S).abs() < 1.0, "lap {d1}");
+    }
+}

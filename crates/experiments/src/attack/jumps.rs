@@ -274,3 +274,33 @@ random seed, direction uniform on the sphere, 20-200 m, start uniform in [70, 33
     }
     s
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn jump_replaces_the_loops_event() {
+        let c = &jump_cases(1, 3)[0];
+        let sc = jump_scenario(c, c.start_s + 30.0).unwrap();
+        assert_eq!(sc.file.seed, c.seed);
+        let events = &sc.file.gnss.as_ref().unwrap().events;
+        assert_eq!(events.len(), 1);
+        match events[0] {
+            EventSpec::Spoof {
+                mode: SpoofMode::Jump,
+                start_s,
+                end_s,
+                offset_m,
+                ..
+            } => {
+                assert_eq!(start_s, c.start_s);
+                assert_eq!(end_s, c.start_s + 30.0);
+                assert_eq!(offset_m, c.offset_m);
+            }
+            ref e => panic!("{e:?}"),
+        }
+        let base = builtin(LOOP_SCENARIO, LOOP_TEXT).unwrap();
+        assert_eq!(sc.trajectory.duration(), base.trajectory.duration());
+    }
+}

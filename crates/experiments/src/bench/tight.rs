@@ -329,3 +329,49 @@ pub fn main(
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn built_in() -> Scenario {
+        builtin(SCENARIO_NAME, SCENARIO_TEXT).unwrap()
+    }
+
+    #[test]
+    fn cut_keeps_whole_segments_then_fills_up() {
+        let full = built_in();
+        let n = full.file.segments.len();
+        let sc = cut_scenario(full.clone(), 600.0).unwrap();
+        assert!((sc.trajectory.duration() - 600.0).abs() < 1e-6);
+        let k = sc.file.segments.len() - 1;
+        assert!(k < n);
+        assert_eq!(
+            format!("{:?}", &sc.file.segments[..k]),
+            format!("{:?}", &full.file.segments[..k])
+        );
+        assert!(matches!(
+            sc.file.segments[k],
+            SegmentSpec::Hold { .. } | SegmentSpec::Static { .. }
+        ));
+        // The copy the simulator writes says what was changed, then the file.
+        assert!(sc
+            .text
+            .starts_with("# navfuse: Changed in code (navfuse bench: cut to 600 s"));
+        assert!(sc.text.ends_with(SCENARIO_TEXT));
+        // Everything else is the file's.
+        assert_eq!(sc.file.seed, full.file.seed);
+        assert_eq!(sc.imu.rate_hz, full.imu.rate_hz);
+    }
+
+    #[test]
+    fn cut_to_the_full_length_or_beyond() {
+        let full = built_in();
+        let d = full.trajectory.duration();
+        let same = cut_scenario(full.clone(), d).unwrap();
+        assert_eq!(same.file.segments.len(), full.file.segments.len());
+        assert_eq!(same.text, full.text);
+        let e = cut_scenario(full, d + 1.0).unwrap_err().to_string();
+        assert!(e.contains("is only"), "{e}");
+    }
+}
