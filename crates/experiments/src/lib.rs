@@ -5,7 +5,7 @@
 //!   (`navfuse_app::run`), score it against the simulated truth, print the figures
 //!   beside the paper's. seed004 also has the spoofing experiments (`attack`: the
 //!   drift attack's variant table, jump attacks, false alarms on clean drives).
-//! - [`bench`]: speed and memory of the navigator, loose coupling on the KF-GINS
+//! - [`bench()`]: speed and memory of the navigator, loose coupling on the KF-GINS
 //!   stand-in or tight coupling on a simulated drive.
 //!
 //! Map: `reproduce` (run, report) -> `reproduce::papers` (the experiments and their
@@ -95,7 +95,7 @@ pub struct BenchArgs {
     pub json: bool,
 }
 
-/// With `tight`: the default of [`BenchArgs::duration_s`] [s].
+/// With `tight`: the default of [`BenchArgs::duration_s`] \[s\].
 pub const BENCH_TIGHT_DEFAULT_DURATION_S: f64 = bench::tight::DEFAULT_DURATION_S;
 
 /// `navfuse bench`: loose coupling on the KF-GINS stand-in, or with `tight` tight
