@@ -126,8 +126,11 @@ pub(crate) fn navigate(
     let started = std::cell::Cell::new(false);
     let mut stopped: Option<RunSummary> = None;
     let mut last_out_t = None;
-    let result = navfuse_core::run(
+    let result = navfuse_core::run_with_sources(
         &cfg.nav,
+        |c: &navfuse_core::config::NavConfig, t0| {
+            opts.extra_sources.map_or_else(Vec::new, |f| f(c, t0))
+        },
         std::iter::once(Ok(first)).chain(reader.by_ref().map(|r| {
             let r = r.map_err(Error::from);
             if started.get() {

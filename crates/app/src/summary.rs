@@ -148,7 +148,9 @@ impl JobResult {
             ));
         }
         let names: Vec<String> = self.files.iter().map(|p| p.display().to_string()).collect();
-        line.push_str(&format!("; wrote {}", names.join(", ")));
+        if !names.is_empty() {
+            line.push_str(&format!("; wrote {}", names.join(", ")));
+        }
         line
     }
 }

@@ -31,7 +31,7 @@ pub use aiding::source::{AidingSource, Fuser, Handled};
 pub use events::{AidStatus, Event, RunSummary};
 pub use nav::ins_filter::{BlockProcess, BlockSpec, Fused};
 pub use nav::navigator::{NavError, Navigator};
-pub use nav::run::run;
+pub use nav::run::{run, run_with_sources, SourceFactory};
 pub use nav::timeline;
 pub use types::{
     merge_measurements, merge_raw_epochs, GnssFix, GnssRawEpoch, HeadingObs, ImuErrors, ImuSample,
