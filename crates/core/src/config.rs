@@ -4,6 +4,7 @@
 use crate::outage::OutageSchedule;
 use crate::types::ImuErrors;
 use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
 
 /// IMU stochastic model (SI units). SYSTEM.md §2: biases and scale factors are
 /// first-order Gauss-Markov processes with correlation time `corr_time_s`.
@@ -193,7 +194,9 @@ pub enum GnssFusion {
 }
 
 /// Which range rate tight coupling fuses with the pseudoranges (SYSTEM.md §3b).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// In the TOML `gnss.range_rate`: "none", "doppler", "tdcp".
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum RangeRate {
     /// Pseudoranges only.
     None,
@@ -327,14 +330,17 @@ impl Default for VehicleOptions {
     }
 }
 
-/// When the non-holonomic constraint is applied.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// When the non-holonomic constraint is applied. In the TOML `nhc.mode`: "off",
+/// "always", "outage".
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum NhcMode {
     Off,
     /// At every constraint epoch while moving.
     Always,
     /// Only while no GNSS measurement has been used for `NhcOptions::outage_after_s`
     /// (seed 002's advice: the constraint matters when GNSS is degraded or lost).
+    #[serde(rename = "outage")]
     DuringOutage,
 }
 
