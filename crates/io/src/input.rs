@@ -241,6 +241,18 @@ pub struct OutputSpec {
     pub csv: bool,
 }
 
+impl Default for OutputSpec {
+    /// Every IMU epoch, `imu_err.txt` and `std.txt`, no CSV (docs/CONFIG.md `[output]`).
+    fn default() -> Self {
+        OutputSpec {
+            rate_hz: None,
+            imu_err: true,
+            std: true,
+            csv: false,
+        }
+    }
+}
+
 /// What an odometer file holds (docs/FORMATS.md "Odometer").
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum OdometerFormat {
