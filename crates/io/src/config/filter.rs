@@ -22,6 +22,15 @@ pub(super) struct TFilter {
     pub(super) gap_rate_dps: Option<f64>,
 }
 
+impl TFilter {
+    pub(super) fn is_empty(&self) -> bool {
+        self.covariance_period_s.is_none()
+            && self.time_offset.is_none()
+            && self.gap_accel_mps2.is_none()
+            && self.gap_rate_dps.is_none()
+    }
+}
+
 pub(super) fn convert(f: &TFilter) -> KResult<FilterOptions> {
     let d = FilterOptions::default();
     Ok(FilterOptions {

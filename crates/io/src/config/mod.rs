@@ -36,10 +36,11 @@ mod spoofing;
 mod tight;
 mod time;
 mod time_offset;
-mod units;
+pub mod units;
 mod validate;
 mod values;
 mod vehicle;
+mod write;
 mod zupt;
 
 use std::path::{Path, PathBuf};
@@ -49,14 +50,15 @@ use navfuse_core::outage::Periodic;
 
 pub use error::ConfigError;
 pub use rinex::{DEFAULT_DGPS_MAX_AGE_S, DEFAULT_ELEVATION_MASK_DEG};
+pub use write::TomlStyle;
 
 use crate::input::{GnssSource, HeadingSource, ImuSource, OdometerSource, OutputSpec};
 use error::KeyErr;
 use kfgins::{kfgins_to_raw, toml_to_yaml_key, yaml_error, yaml_line_of, KfProbe, KfYaml};
 use kfgins::{KF_NOISE_KEYS, KF_TOP_KEYS};
 use locate::{toml_error, toml_line_of};
-use paths::{resolve_path, PathWriter};
-use root::{convert, to_raw, TomlRoot};
+use paths::resolve_path;
+use root::{convert, TomlRoot};
 
 // ---------------------------------------------------------------------------------
 // The result
@@ -127,12 +129,12 @@ impl RunConfig {
 
     /// This configuration in navfuse's TOML format, every key written out (defaults
     /// included), values in the units of the file format. Paths are written absolute.
-    /// `load_toml` of the result gives back this configuration (up to rounding in the
-    /// unit conversions), minus `kfgins_output_path` and `warnings`.
+    /// `load_toml` of the result gives back this configuration (exactly, unless a
+    /// value has no exact decimal in the file's unit), minus `kfgins_output_path` and
+    /// `warnings`. [`RunConfig::to_toml_with`] writes relative paths or leaves out
+    /// defaults.
     pub fn to_toml_string(&self) -> String {
-        let raw = to_raw(self, &PathWriter::default());
-        let body =
-            toml::to_string(&raw).unwrap_or_else(|e| format!("# serialization failed: {e}\n"));
+        let body = self.to_toml_with(&TomlStyle::default());
         let mut out = format!(
             "# navfuse run configuration (docs/CONFIG.md), written from {}\n",
             self.source_path.display()

@@ -19,6 +19,12 @@ pub(super) struct TOutput {
     pub(super) csv: Option<bool>,
 }
 
+impl TOutput {
+    pub(super) fn is_empty(&self) -> bool {
+        self.rate_hz.is_none() && self.imu_err.is_none() && self.std.is_none() && self.csv.is_none()
+    }
+}
+
 pub(super) fn convert(o: &TOutput) -> KResult<OutputSpec> {
     let d = OutputSpec::default();
     Ok(OutputSpec {

@@ -10,7 +10,7 @@ use super::error::{kerr, KResult};
 use super::gnss::TGnss;
 use super::paths::{file_key, PathWriter};
 use super::tight;
-use super::units::{D2R, SAME};
+use super::units::{DEG, SAME};
 use super::validate::{opt_or, positive, v3};
 use crate::input::{Coupling, DgpsKind, DgpsSource, RinexGnss};
 
@@ -73,7 +73,7 @@ pub(super) fn convert(g: &TGnss, base: &Path) -> KResult<(RinexGnss, TightOption
                 let p = v3(key, p)?;
                 Some(DgpsKind::ReferenceStation {
                     obs_path: file_key(base, "gnss.dgps_reference_obs", f)?,
-                    position_lla: [p[0] * D2R, p[1] * D2R, p[2]],
+                    position_lla: [DEG.si(p[0]), DEG.si(p[1]), p[2]],
                 })
             }
             (true, None, None) => return Err(kerr(
@@ -120,8 +120,8 @@ pub(super) fn to_toml(r: &RinexGnss, tight: &TightOptions, t: &mut TGnss, w: &Pa
             } => {
                 t.dgps_reference_obs = Some(w.path(obs_path));
                 t.dgps_reference_position_deg_m = Some(vec![
-                    position_lla[0] / D2R,
-                    position_lla[1] / D2R,
+                    DEG.user(position_lla[0]),
+                    DEG.user(position_lla[1]),
                     position_lla[2],
                 ]);
             }

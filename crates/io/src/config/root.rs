@@ -49,9 +49,9 @@ pub(super) struct TomlRoot {
     pub(super) zupt: Option<TZupt>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) spoofing: Option<TSpoofing>,
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "TFilter::is_empty")]
     pub(super) filter: TFilter,
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "TOutput::is_empty")]
     pub(super) output: TOutput,
 }
 
