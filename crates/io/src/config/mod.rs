@@ -12,7 +12,8 @@
 //! section as written (its raw serde struct), its conversion to values and its
 //! writing back; `root.rs` lists the sections. Shared pieces: `values.rs` (value
 //! shapes), `units.rs`, `validate.rs`, `paths.rs`, `error.rs`, `locate.rs` (TOML
-//! error locations) and `kfgins.rs` (the KF-GINS YAML translation).
+//! error locations), `kfgins.rs` (the KF-GINS YAML translation) and `write.rs`
+//! (writing: every key, or only those that differ from what loading fills in).
 
 mod alignment;
 mod error;
