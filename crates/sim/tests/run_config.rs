@@ -8,7 +8,7 @@
 use std::path::{Path, PathBuf};
 
 use navfuse_io::config::{load, RunConfig};
-use navfuse_sim::generate::{run_config, run_config_text};
+use navfuse_sim::run_config::{run_config, run_config_text};
 use navfuse_sim::scenario::Scenario;
 
 fn scenarios() -> Vec<PathBuf> {
