@@ -4,6 +4,7 @@
 use crate::outage::OutageSchedule;
 use crate::types::ImuErrors;
 use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
 
 /// IMU stochastic model (SI units). SYSTEM.md §2: biases and scale factors are
 /// first-order Gauss-Markov processes with correlation time `corr_time_s`.
@@ -23,6 +24,19 @@ pub struct ImuNoise {
     pub accel_scale_std: Vector3<f64>,
     /// Correlation time of all twelve Gauss-Markov states [s].
     pub corr_time_s: f64,
+}
+
+impl ImuNoise {
+    /// The noise model's bias and scale-factor stds as initial IMU error stds (what
+    /// KF-GINS assumes when a configuration gives none).
+    pub fn error_stds(&self) -> ImuErrors {
+        ImuErrors {
+            gyro_bias: self.gyro_bias_std,
+            accel_bias: self.accel_bias_std,
+            gyro_scale: self.gyro_scale_std,
+            accel_scale: self.accel_scale_std,
+        }
+    }
 }
 
 /// How the initial attitude is found (SYSTEM.md §1 "Initial alignment"; alignment.rs).
@@ -55,6 +69,23 @@ pub enum AttitudeInit {
     },
 }
 
+/// Default levelling window of the alignments that level [s].
+pub const DEFAULT_LEVEL_WINDOW_S: f64 = 10.0;
+/// Default speed from which a GNSS course gives the yaw [m/s].
+pub const DEFAULT_ALIGN_MIN_SPEED_MPS: f64 = 3.0;
+
+impl Default for AttitudeInit {
+    /// Found from the data: static levelling and GNSS course when the start is
+    /// static, in-motion alignment otherwise (no attitude in the configuration).
+    fn default() -> Self {
+        AttitudeInit::Auto {
+            level_window_s: DEFAULT_LEVEL_WINDOW_S,
+            min_speed_mps: DEFAULT_ALIGN_MIN_SPEED_MPS,
+            gyrocompass: false,
+        }
+    }
+}
+
 /// Initial state and its uncertainty.
 #[derive(Clone, Debug, PartialEq)]
 pub struct InitialState {
@@ -74,6 +105,30 @@ pub struct InitialState {
     pub imu_errors_std: ImuErrors,
 }
 
+impl InitialState {
+    /// The given position, velocity and attitude stds, everything else at its default:
+    /// position from the first GNSS fix, at rest, attitude found from the data
+    /// ([`AttitudeInit::default`]), zero IMU errors with the noise model's stds
+    /// ([`ImuNoise::error_stds`]). There is no `Default`: the stds have none.
+    pub fn new(
+        pos_std: Vector3<f64>,
+        vel_std: Vector3<f64>,
+        att_std: Vector3<f64>,
+        imu_noise: &ImuNoise,
+    ) -> Self {
+        InitialState {
+            lla: None,
+            v_n: Vector3::zeros(),
+            attitude: AttitudeInit::default(),
+            imu_errors: ImuErrors::default(),
+            pos_std,
+            vel_std,
+            att_std,
+            imu_errors_std: imu_noise.error_stds(),
+        }
+    }
+}
+
 /// GNSS-to-IMU time offset tau(t) = tau0 + rate * (t - t0): a GNSS epoch tagged t is
 /// applied at IMU time t + tau. Estimated as filter states when the stds are > 0
 /// (the rate state absorbs a clock-rate difference between the IMU time tags and GPS
@@ -90,6 +145,20 @@ pub struct TimeOffsetConfig {
     pub initial_rate: f64,
     /// Initial 1-sigma of the rate [s/s]; 0 = no rate state (rate stays `initial_rate`).
     pub rate_std: f64,
+}
+
+impl Default for TimeOffsetConfig {
+    /// Estimated, starting from 0 with a 0.5 s std, constant, no rate state (the
+    /// defaults of `[filter.time_offset]`).
+    fn default() -> Self {
+        TimeOffsetConfig {
+            initial_s: 0.0,
+            std_s: 0.5,
+            random_walk: 0.0,
+            initial_rate: 0.0,
+            rate_std: 0.0,
+        }
+    }
 }
 
 /// How GNSS fixes are used.
@@ -117,6 +186,24 @@ pub struct GnssOptions {
     pub fusion: GnssFusion,
     /// Error model of the fixes and the handling of disagreeing ones (fix_error.rs).
     pub fix_error: FixErrorOptions,
+}
+
+impl Default for GnssOptions {
+    /// The `[gnss]` defaults: no lever arm, velocity used, the fixes' own stds, the
+    /// default gate and timeout, no outages, error-state fusion, correlated fixes.
+    fn default() -> Self {
+        GnssOptions {
+            lever_arm_b: Vector3::zeros(),
+            use_velocity: true,
+            position_std_override: None,
+            velocity_std_override: None,
+            gate_probability: Some(DEFAULT_FIX_GATE_PROBABILITY),
+            gate_timeout_s: DEFAULT_GATE_TIMEOUT_S,
+            outages: OutageSchedule::default(),
+            fusion: GnssFusion::ErrorState,
+            fix_error: FixErrorOptions::default(),
+        }
+    }
 }
 
 /// The loosely coupled fixes' error model and outlier handling (fix_error.rs).
@@ -193,7 +280,9 @@ pub enum GnssFusion {
 }
 
 /// Which range rate tight coupling fuses with the pseudoranges (SYSTEM.md §3b).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// In the TOML `gnss.range_rate`: "none", "doppler", "tdcp".
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum RangeRate {
     /// Pseudoranges only.
     None,
@@ -327,14 +416,17 @@ impl Default for VehicleOptions {
     }
 }
 
-/// When the non-holonomic constraint is applied.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// When the non-holonomic constraint is applied. In the TOML `nhc.mode`: "off",
+/// "always", "outage".
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum NhcMode {
     Off,
     /// At every constraint epoch while moving.
     Always,
     /// Only while no GNSS measurement has been used for `NhcOptions::outage_after_s`
     /// (seed 002's advice: the constraint matters when GNSS is degraded or lost).
+    #[serde(rename = "outage")]
     DuringOutage,
 }
 
@@ -521,4 +613,29 @@ pub struct NavConfig {
     pub start_time: f64,
     /// End time [s]; None = to the end of the data.
     pub end_time: Option<f64>,
+}
+
+impl NavConfig {
+    /// The given IMU noise model and initial state, every other option at its default
+    /// (the defaults of the run configuration, docs/CONFIG.md): loosely coupled GNSS
+    /// with the default gate, no vehicle aiding, no integrity monitor, from the first
+    /// to the last IMU epoch. There is no `Default`: the noise model and the initial
+    /// stds have none.
+    pub fn new(imu_noise: ImuNoise, initial: InitialState) -> Self {
+        NavConfig {
+            imu_noise,
+            tight: TightOptions::default(),
+            integrity: crate::integrity::IntegrityOptions::default(),
+            initial,
+            gnss: GnssOptions::default(),
+            filter: FilterOptions::default(),
+            vehicle: VehicleOptions::default(),
+            nhc: NhcOptions::default(),
+            odometer: OdometerOptions::default(),
+            heading: HeadingOptions::default(),
+            zupt: ZuptOptions::default(),
+            start_time: f64::NEG_INFINITY,
+            end_time: None,
+        }
+    }
 }

@@ -1,10 +1,12 @@
 //! What to read and how: the input and output descriptions shared by the config
 //! loader (`config.rs`) and the readers. Plain data, documented in docs/FORMATS.md.
 
+use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
 /// What the IMU columns hold.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum ImuQuantity {
     /// Angular rate and specific force; converted to increments over each interval.
     Rate,
@@ -13,7 +15,8 @@ pub enum ImuQuantity {
 }
 
 /// How a rate sample relates to its time tag.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum RateSampling {
     /// Instantaneous value at t_k: increment = (w_{k-1} + w_k) / 2 * dt (trapezoid).
     Instant,
@@ -21,36 +24,45 @@ pub enum RateSampling {
     IntervalMean,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum TimeUnit {
+    #[serde(rename = "s")]
     Seconds,
+    #[serde(rename = "ms")]
     Milliseconds,
+    #[serde(rename = "us")]
     Microseconds,
+    #[serde(rename = "ns")]
     Nanoseconds,
 }
 
 /// Which clock the time column counts in.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum TimeScale {
     /// GPS seconds of week (as KF-GINS).
+    #[serde(rename = "gps_sow")]
     GpsSecondsOfWeek,
     /// GPS time counted from the Unix epoch with no leap seconds (RTKLIB tag files).
+    #[serde(rename = "gpst_unix")]
     GpstUnix,
 }
 
 /// Gyro column unit: rates (rad/s, deg/s) or increments (rad, deg).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum GyroUnit {
     Rad,
     Deg,
 }
 
 /// Accelerometer column unit (per second for rates; m/s or g*s for increments).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum AccelUnit {
     /// m/s² (rates) or m/s (increments).
+    #[serde(rename = "m")]
     Metre,
     /// Standard gravity 9.80665 m/s² (rates) or g*s (increments).
+    #[serde(rename = "g")]
     G,
 }
 
@@ -160,7 +172,8 @@ pub enum GnssFormat {
 }
 
 /// How RINEX observations are used.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Coupling {
     /// Single point positioning fixes (position + Doppler velocity) fused as fixes.
     Loose,
@@ -226,6 +239,18 @@ pub struct OutputSpec {
     pub std: bool,
     /// `solution.csv` with a header row.
     pub csv: bool,
+}
+
+impl Default for OutputSpec {
+    /// Every IMU epoch, `imu_err.txt` and `std.txt`, no CSV (docs/CONFIG.md `[output]`).
+    fn default() -> Self {
+        OutputSpec {
+            rate_hz: None,
+            imu_err: true,
+            std: true,
+            csv: false,
+        }
+    }
 }
 
 /// What an odometer file holds (docs/FORMATS.md "Odometer").

@@ -15,5 +15,6 @@ pub mod generate;
 pub mod gnss_sim;
 pub mod imu_model;
 pub mod random;
+pub mod run_config;
 pub mod scenario;
 pub mod trajectory;
