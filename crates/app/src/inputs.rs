@@ -32,6 +32,8 @@ pub(crate) struct Inputs {
     pub gnss_skipped: usize,
     pub odometer: Vec<OdometerSample>,
     pub heading: Vec<HeadingObs>,
+    /// The other aiding inputs (IMU time scale), as measurements.
+    pub other: Vec<navfuse_core::Measurement>,
 }
 
 /// Open the IMU and read the other inputs `cfg` names; input notes go to `job.notes`,
@@ -99,6 +101,7 @@ pub(crate) fn read(cfg: &RunConfig, job: &mut JobResult, warn: bool) -> Result<I
         }
         _ => Vec::new(),
     };
+    let other = navfuse_io::input::read_aiding_inputs(cfg, &mut reader_warnings)?;
     check(
         job,
         warn,
@@ -128,6 +131,7 @@ pub(crate) fn read(cfg: &RunConfig, job: &mut JobResult, warn: bool) -> Result<I
         gnss_skipped,
         odometer,
         heading,
+        other,
     })
 }
 

@@ -33,6 +33,7 @@ pub(crate) fn navigate(
         gnss_skipped,
         odometer,
         heading,
+        other,
     } = inputs::read(&cfg, job, warn)?;
     // GNSS epoch times (fixes, or raw epochs with tight coupling).
     let gnss_times: Vec<f64> = fixes
@@ -58,9 +59,12 @@ pub(crate) fn navigate(
     // Configuration and input checks before the run.
     let found = checks::before_run(&cfg, gnss_epochs, gnss_skipped, last_gnss_t);
     check(job, warn, found)?;
-    let measurements = navfuse_core::merge_raw_epochs(
-        navfuse_core::merge_measurements(&fixes, &odometer, &heading),
-        raw,
+    let measurements = navfuse_core::merge_more(
+        navfuse_core::merge_raw_epochs(
+            navfuse_core::merge_measurements(&fixes, &odometer, &heading),
+            raw,
+        ),
+        other,
     );
 
     let first = match reader.next() {

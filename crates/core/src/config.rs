@@ -609,6 +609,8 @@ pub struct NavConfig {
     pub odometer: OdometerOptions,
     pub heading: HeadingOptions,
     pub zupt: ZuptOptions,
+    /// Barometric altitude aiding (aiding/baro.rs).
+    pub baro: crate::aiding::baro::BaroOptions,
     /// Start time [s]; IMU data before it are skipped.
     pub start_time: f64,
     /// End time [s]; None = to the end of the data.
@@ -634,6 +636,7 @@ impl NavConfig {
             odometer: OdometerOptions::default(),
             heading: HeadingOptions::default(),
             zupt: ZuptOptions::default(),
+            baro: Default::default(),
             start_time: f64::NEG_INFINITY,
             end_time: None,
         }

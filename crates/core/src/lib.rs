@@ -34,6 +34,6 @@ pub use nav::navigator::{NavError, Navigator};
 pub use nav::run::{run, run_with_sources, SourceFactory};
 pub use nav::timeline;
 pub use types::{
-    merge_measurements, merge_raw_epochs, GnssFix, GnssRawEpoch, HeadingObs, ImuErrors, ImuSample,
-    Measurement, NavState, OdometerSample, SatMeasurement,
+    merge_measurements, merge_more, merge_raw_epochs, GnssFix, GnssRawEpoch, HeadingObs, ImuErrors,
+    ImuSample, Measurement, NavState, OdometerSample, SatMeasurement,
 };

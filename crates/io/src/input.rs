@@ -281,3 +281,22 @@ pub struct OdometerSource {
 pub struct HeadingSource {
     pub path: PathBuf,
 }
+
+/// The aiding inputs on the IMU time scale that need no week alignment, read and
+/// turned into measurements: one line per reader (the barometer). A reader's
+/// warnings (a damaged last line dropped) go to `warnings`.
+pub fn read_aiding_inputs(
+    cfg: &crate::config::RunConfig,
+    warnings: &mut Vec<String>,
+) -> Result<Vec<navfuse_core::Measurement>, crate::error::InputError> {
+    use navfuse_core::Measurement;
+    let mut out = Vec::new();
+    if let Some(src) = cfg.baro.as_ref().filter(|_| cfg.nav.baro.enabled) {
+        out.extend(
+            crate::baro::read_baro(src, warnings)?
+                .into_iter()
+                .map(Measurement::Baro),
+        );
+    }
+    Ok(out)
+}

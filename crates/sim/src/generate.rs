@@ -18,6 +18,7 @@ use navfuse_io::nav::{ImuErrWriter, NavWriter, SolutionRecord};
 use navfuse_io::rinex_nav::{read_rinex_nav, write_rinex3_nav_dated, RinexNav};
 use navfuse_io::rinex_obs::{ObsHeader, RinexObsWriter};
 
+use crate::baro_sim::BaroSim;
 use crate::gnss_sim::{EventSpec, GnssSim};
 use crate::imu_model::{ImuErrorModel, ImuOutput};
 use crate::random::Stream;
@@ -174,6 +175,19 @@ pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError>
     let mut distance = 0.0_f64;
     let mut odo_pulses_prev: i64 = 0;
     let mut odo_t_prev = traj.t_start();
+
+    // Barometer (baro_sim.rs): pressure readings and the true bias beside them.
+    let mut baro = match &sc.file.baro {
+        Some(b) => {
+            let mut o = Out::create(out_dir, "baro.txt", &mut files)?;
+            o.put(b"# t [s of GPS week], pressure [Pa]\n")?;
+            let mut tr = Out::create(out_dir, "baro_truth.txt", &mut files)?;
+            tr.put(b"# t [s of GPS week, time of validity], barometer error without its white noise [m]\n")?;
+            let every = (imu_rate / b.rate_hz).round().max(1.0) as u64;
+            Some((BaroSim::new(b, seed, traj.t_start()), every, o, tr))
+        }
+        None => None,
+    };
 
     // GNSS.
     let gspec = sc.file.gnss.clone();
@@ -462,6 +476,13 @@ pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError>
             )?;
             summary.truth_epochs += 1;
         }
+        if let Some((sim, every, o, tr)) = baro.as_mut() {
+            if k % *every == 0 {
+                let r = sim.sample(cur.t, cur.lla.z);
+                o.put(format!("{:.9} {:.4}\n", r.t_tag, r.pressure_pa).as_bytes())?;
+                tr.put(format!("{:.9} {:.6}\n", cur.t, r.bias_m).as_bytes())?;
+            }
+        }
         if let (Some(o), Some(every), Some(spec)) = (odo_out.as_mut(), odo_every, odo.as_ref()) {
             if k % every == 0 {
                 // SYSTEM.md §4b: true distance = (1 + dk) K_OD N.
@@ -495,9 +516,15 @@ pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError>
     if let Some(w) = err_out {
         w.finish()?;
     }
-    for o in [odo_out, fix_out, head_out, dgps_out, err_csv]
-        .into_iter()
-        .flatten()
+    let (baro_out, baro_truth) = match baro {
+        Some((_, _, o, tr)) => (Some(o), Some(tr)),
+        None => (None, None),
+    };
+    for o in [
+        odo_out, fix_out, head_out, dgps_out, err_csv, baro_out, baro_truth,
+    ]
+    .into_iter()
+    .flatten()
     {
         o.finish()?;
     }

@@ -11,6 +11,7 @@
 //! - [`generate`]: one streaming pass that writes every output file.
 
 pub mod allan;
+pub mod baro_sim;
 pub mod generate;
 pub mod gnss_sim;
 pub mod imu_model;

@@ -5,9 +5,11 @@
 use std::path::Path;
 
 use nalgebra::Vector3;
+use navfuse_core::aiding::baro::BaroOptions;
 use navfuse_core::config::{
     AttitudeInit, GnssOptions, ImuNoise, InitialState, NavConfig, RangeRate, VehicleOptions,
 };
+use navfuse_io::baro::{BaroQuantity, BaroSource};
 use navfuse_io::config::{units, RunConfig, TomlStyle};
 use navfuse_io::input::{
     Coupling, CsvImuOptions, GapPolicy, GnssFormat, GnssSource, HeadingSource, ImuFormat,
@@ -210,8 +212,31 @@ pub fn run_config(sc: &Scenario, dir: &Path) -> RunConfig {
             mounting_std: units::DEG.si(1.0),
         };
     }
+    // Barometer: baro.txt (pressure in Pa); the filter's bias walk covers the
+    // simulated drift and the slow error (amplitude A over a quarter period P/4).
+    let baro = sc.file.baro.as_ref().map(|b| {
+        let slow = if b.slow_period_s > 0.0 {
+            b.slow_amplitude_m.powi(2) / (b.slow_period_s / 4.0)
+        } else {
+            0.0
+        };
+        let walk_si = ((b.bias_drift_m_per_sqrth / 60.0).powi(2) + slow).sqrt();
+        nav.baro = BaroOptions {
+            enabled: true,
+            std_m: b.noise_std_m.max(0.05),
+            bias_random_walk: units::VRW.si(units::VRW.user(walk_si)),
+            ..BaroOptions::default()
+        };
+        BaroSource {
+            path: dir.join("baro.txt"),
+            quantity: BaroQuantity::PressurePa,
+            reference_pressure_pa: b.reference_pressure_pa,
+            delay_s: b.delay_s,
+        }
+    });
     RunConfig {
         nav,
+        baro,
         imu,
         gnss,
         odometer,

@@ -30,6 +30,9 @@ pub struct ScenarioFile {
     pub imu: Option<ImuSpec>,
     #[serde(default)]
     pub odometer: Option<OdometerSpec>,
+    /// Simulated barometer (baro_sim.rs).
+    #[serde(default)]
+    pub baro: Option<crate::baro_sim::BaroSpec>,
     #[serde(default)]
     pub gnss: Option<GnssSpec>,
     #[serde(default)]

@@ -223,8 +223,15 @@ mod tests {
         // The true state: est - dx (position NED, C_true = (I + phi x) C_est).
         let mut truth = fx.nav;
         truth.lla = lla_add_ned(&fx.nav.lla, &(-Vector3::new(0.0, 0.0, dx[POS + 2])));
-        truth.q_bn = quat_from_rotvec(&Vector3::new(dx[ATT], dx[ATT + 1], dx[ATT + 2])) * fx.nav.q_bn;
-        let tru = linearize(&ctx_of(&truth, fx.vehicle), &z, bias_est - d_bias, &lever, 0.5);
+        truth.q_bn =
+            quat_from_rotvec(&Vector3::new(dx[ATT], dx[ATT + 1], dx[ATT + 2])) * fx.nav.q_bn;
+        let tru = linearize(
+            &ctx_of(&truth, fx.vehicle),
+            &z,
+            bias_est - d_bias,
+            &lever,
+            0.5,
+        );
         let dy = est.y[0] - tru.y[0];
         let hdx = (&est.h * &dx)[0];
         assert!((dy - hdx).abs() < 1e-6, "dy {dy} H dx {hdx}");

@@ -16,6 +16,7 @@
 //! (writing: every key, or only those that differ from what loading fills in).
 
 mod alignment;
+mod baro;
 mod error;
 mod filter;
 mod gnss;
@@ -106,6 +107,8 @@ pub struct RunConfig {
     /// Dual-antenna heading input (`heading.file`); None = none. Times on the GNSS
     /// time scale.
     pub heading: Option<HeadingSource>,
+    /// Barometer input (`[baro]`); None = none. Times on the IMU time scale.
+    pub baro: Option<crate::baro::BaroSource>,
     pub output: OutputSpec,
     /// The config file this came from.
     pub source_path: PathBuf,

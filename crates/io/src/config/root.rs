@@ -8,6 +8,7 @@ use navfuse_core::config::{GnssFusion, GnssOptions, NavConfig, TightOptions};
 use navfuse_core::integrity::IntegrityReference;
 use serde::{Deserialize, Serialize};
 
+use super::baro::{self, TBaro};
 use super::error::{kerr, KResult};
 use super::filter::{self, TFilter};
 use super::gnss::{self, TGnss};
@@ -37,6 +38,8 @@ pub(super) struct TomlRoot {
     pub(super) odometer: Option<TOdometer>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) heading: Option<THeading>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) baro: Option<TBaro>,
     #[serde(default, skip_serializing_if = "TTime::is_empty")]
     pub(super) time: TTime,
     pub(super) initial: TInitial,
@@ -63,6 +66,7 @@ pub(super) struct Converted {
     gnss: Option<GnssSource>,
     odometer: Option<OdometerSource>,
     heading: Option<HeadingSource>,
+    baro: Option<crate::baro::BaroSource>,
     output: OutputSpec,
     relative_outages: Vec<RelativeOutage>,
 }
@@ -80,6 +84,7 @@ impl Converted {
             gnss: self.gnss,
             odometer: self.odometer,
             heading: self.heading,
+            baro: self.baro,
             output: self.output,
             source_path: path.to_path_buf(),
             kfgins_output_path: kf_out,
@@ -127,6 +132,13 @@ pub(super) fn convert(raw: TomlRoot, base: &Path) -> KResult<Converted> {
         Some(h) => heading::convert(h, base)?,
         None => (None, d.heading.clone()),
     };
+    let (baro_src, baro_opts) = match &raw.baro {
+        Some(b) => {
+            let (s, o) = baro::convert(b, base)?;
+            (Some(s), o)
+        }
+        None => (None, d.baro.clone()),
+    };
     let integrity = raw.spoofing.as_ref().map(spoofing::convert).transpose()?;
     let zupt = raw.zupt.as_ref().map(zupt::convert).transpose()?;
     let nav = NavConfig {
@@ -139,6 +151,7 @@ pub(super) fn convert(raw: TomlRoot, base: &Path) -> KResult<Converted> {
         heading,
         integrity: integrity.unwrap_or(d.integrity.clone()),
         zupt: zupt.unwrap_or(d.zupt.clone()),
+        baro: baro_opts,
         start_time: start.unwrap_or(d.start_time),
         end_time: end.or(d.end_time),
         ..d
@@ -158,6 +171,7 @@ pub(super) fn convert(raw: TomlRoot, base: &Path) -> KResult<Converted> {
         gnss,
         odometer: odometer_src,
         heading: heading_src,
+        baro: baro_src,
         output,
         relative_outages,
     })
@@ -174,6 +188,7 @@ pub(super) fn to_raw(c: &RunConfig, w: &PathWriter) -> TomlRoot {
             .map(|g| gnss::to_toml(g, &n.gnss, &n.tight, &c.relative_outages, w)),
         odometer: odometer::to_toml(c.odometer.as_ref(), &n.odometer, w),
         heading: Some(heading::to_toml(c.heading.as_ref(), &n.heading, w)),
+        baro: baro::to_toml(c.baro.as_ref(), &n.baro, w),
         time: time::to_toml(n.start_time, n.end_time),
         initial: initial::to_toml(&n.initial),
         imu_noise: imu_noise::to_toml(&n.imu_noise),
