@@ -9,6 +9,7 @@
 pub mod aiding;
 pub mod alignment;
 pub mod attitude;
+pub mod chi2;
 pub mod config;
 pub mod earth;
 pub mod engine;

@@ -23,6 +23,7 @@ use crate::ephemeris_set::EphemerisSet;
 use crate::geometry::{az_el, signal_path, SignalPath};
 use crate::time::GpsTime;
 use nalgebra::{Matrix3, Matrix4, Vector3, Vector4};
+use navfuse_core::chi2::chi2_quantile;
 use navfuse_core::earth::{c_ne, ecef_to_lla};
 use std::fmt;
 
@@ -754,7 +755,7 @@ pub fn solve_epoch(
             .zip(&fitted.post_m)
             .map(|(r, v)| v * v / r.var_m2)
             .sum();
-        let threshold = (n_used > 4).then(|| chi2_quantile(cfg.chi2_probability, n_used - 4));
+        let threshold = (n_used > 4).then(|| chi2_quantile(n_used - 4, cfg.chi2_probability));
         if let (true, Some(thr)) = (cfg.fde, threshold) {
             if chi2 > thr {
                 if n_used < FDE_MIN_SATELLITES {
@@ -894,103 +895,6 @@ impl SppSolver {
     pub fn reset(&mut self) {
         self.last = None;
     }
-}
-
-/// ln Gamma(k / 2) for an integer k >= 1, by Gamma(a + 1) = a Gamma(a) from
-/// Gamma(1) = 1 or Gamma(1/2) = sqrt(pi).
-fn ln_gamma_half(k: usize) -> f64 {
-    let target = k as f64 / 2.0;
-    let (mut a, mut lg) = if k.is_multiple_of(2) {
-        (1.0, 0.0)
-    } else {
-        (0.5, 0.5 * std::f64::consts::PI.ln())
-    };
-    while a < target - 0.25 {
-        lg += f64::ln(a);
-        a += 1.0;
-    }
-    lg
-}
-
-/// Regularised lower incomplete gamma P(a, x), a = k/2: power series below a + 1,
-/// Legendre's continued fraction for the upper part above (evaluated by Lentz's
-/// method).
-fn gamma_p(k: usize, x: f64) -> f64 {
-    if x <= 0.0 {
-        return 0.0;
-    }
-    let a = k as f64 / 2.0;
-    let ln_pre = -x + a * x.ln() - ln_gamma_half(k);
-    if x < a + 1.0 {
-        // P = e^-x x^a / Gamma(a) * sum_n x^n / (a (a+1) ... (a+n)).
-        let mut ap = a;
-        let mut term = 1.0 / a;
-        let mut sum = term;
-        for _ in 0..10_000 {
-            ap += 1.0;
-            term *= x / ap;
-            sum += term;
-            if term < sum * 1e-17 {
-                break;
-            }
-        }
-        (sum.ln() + ln_pre).exp().min(1.0)
-    } else {
-        // Q = e^-x x^a / Gamma(a) * 1/(x+1-a- 1(1-a)/(x+3-a- 2(2-a)/(x+5-a- ...))).
-        let tiny = 1e-300;
-        let mut bn = x + 1.0 - a;
-        let mut c = 1.0 / tiny;
-        let mut d = 1.0 / bn;
-        let mut h = d;
-        for i in 1..10_000 {
-            let an = -(i as f64) * (i as f64 - a);
-            bn += 2.0;
-            d = an * d + bn;
-            if d.abs() < tiny {
-                d = tiny;
-            }
-            c = bn + an / c;
-            if c.abs() < tiny {
-                c = tiny;
-            }
-            d = 1.0 / d;
-            let del = d * c;
-            h *= del;
-            if (del - 1.0).abs() < 1e-16 {
-                break;
-            }
-        }
-        (1.0 - (ln_pre.exp() * h)).max(0.0)
-    }
-}
-
-/// Chi-square quantile: the x with P(chi2_dof <= x) = `p` (bisection on the CDF to
-/// 1e-10 relative). `p` is clamped to [1e-12, 1 - 1e-12].
-pub fn chi2_quantile(p: f64, dof: usize) -> f64 {
-    let dof = dof.max(1);
-    let p = if p.is_finite() {
-        p.clamp(1e-12, 1.0 - 1e-12)
-    } else {
-        0.999
-    };
-    let cdf = |x: f64| gamma_p(dof, 0.5 * x);
-    let mut hi = 2.0 * dof as f64 + 50.0;
-    while cdf(hi) < p && hi < 1e7 {
-        hi *= 2.0;
-    }
-    let mut lo = 0.0;
-    for _ in 0..200 {
-        let mid = 0.5 * (lo + hi);
-        if cdf(mid) < p {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-        if hi - lo <= 1e-10 * hi {
-            break;
-        }
-    }
-    0.5 * (lo + hi)
 }
 
 #[cfg(test)]
@@ -1354,22 +1258,5 @@ mod tests {
         assert_eq!(ura_variance_m2(2.5), 3.4 * 3.4);
         assert_eq!(ura_variance_m2(1e5), 6144.0 * 6144.0);
         assert_eq!(ura_variance_m2(f64::NAN), 6144.0 * 6144.0);
-    }
-
-    #[test]
-    fn chi2_quantiles() {
-        // Tabulated values (e.g. NIST/SEMATECH e-Handbook 1.3.6.7.4).
-        for (p, dof, x) in [
-            (0.95, 1, 3.841),
-            (0.999, 1, 10.828),
-            (0.999, 2, 13.816),
-            (0.999, 5, 20.515),
-            (0.999, 10, 29.588),
-            (0.99, 30, 50.892),
-            (0.95, 100, 124.342),
-        ] {
-            let q = chi2_quantile(p, dof);
-            assert!((q - x).abs() < 1.5e-3, "p {p} dof {dof}: {q} vs {x}");
-        }
     }
 }
