@@ -23,6 +23,7 @@ pub mod outage;
 pub mod six_state;
 pub mod state;
 pub mod static_detect;
+pub mod time;
 pub mod timeline;
 pub mod types;
 

@@ -218,7 +218,7 @@ pub fn corrections_from_reference_station(
     // Smoothed clock: (tag time [s of week], c dt_ref [m], drift [m/s]).
     let mut clock: Option<(f64, f64, f64)> = None;
     for (k, ep) in epochs.iter().enumerate() {
-        let t_tag = f64::from(ep.t.week - week) * 604_800.0 + ep.t.sow;
+        let t_tag = ep.t.seconds_of_week(week);
         let gap = clock.map(|(tp, _, _)| t_tag - tp);
         let continuous_epoch =
             ep.flag == 0 && gap.is_some_and(|dt| dt > 0.0 && dt <= REF_MAX_GAP_S);

@@ -157,7 +157,7 @@ impl EpochPreparer {
     pub fn prepare(&mut self, epoch: &ObsEpoch, week: i32) -> PreparedEpoch {
         let c = SPEED_OF_LIGHT_MPS;
         self.epoch += 1;
-        let t_tag_s = f64::from(epoch.t.week - week) * SECONDS_PER_WEEK + epoch.t.sow;
+        let t_tag_s = epoch.t.seconds_of_week(week);
         let predicted = self.last.map(|l| l.predict(t_tag_s));
 
         // DGPS corrections of this epoch: tags and correction times lie on the same

@@ -17,6 +17,7 @@
 use crate::error::{shorten, InputError};
 use crate::fmt::{field, is_comment_line, parse_f64, parse_i64, split_fields, LineReader};
 use nalgebra::Vector3;
+use navfuse_core::time::SECONDS_PER_WEEK;
 use navfuse_gnss::dgps::DgpsCorrection;
 use std::path::Path;
 
@@ -32,7 +33,6 @@ pub struct DgpsFile {
 /// The required header fields.
 pub const DGPS_HEADER: [&str; 5] = ["t_s", "prn", "prc_m", "rrc_mps", "iode"];
 const WHAT: &str = "t_s, prn, prc_m, rrc_mps, iode";
-const SECONDS_PER_WEEK: f64 = 604_800.0;
 
 /// Read the corrections of a DGPS correction file; see the module documentation.
 pub fn read_dgps_corrections(path: &Path) -> Result<Vec<DgpsCorrection>, InputError> {

@@ -34,7 +34,7 @@ use crate::input::{
     AccelUnit, CsvImuOptions, GapPolicy, GyroUnit, ImuFormat, ImuQuantity, ImuSource, RateSampling,
     TimeScale, TimeUnit,
 };
-use crate::time::{gpst_unix_to_week_sow, GPS_EPOCH_UNIX, SECONDS_PER_WEEK};
+use crate::time::{gpst_unix_to_week_sow, GPS_EPOCH_UNIX, SECONDS_PER_WEEK_I64};
 use crate::timetag::read_timetag;
 use nalgebra::{Matrix3, Vector3};
 use navfuse_core::attitude::c_bn_from_euler;
@@ -709,7 +709,7 @@ fn csv_time_base(
                 ),
             )
         })?;
-        let base_s = GPS_EPOCH_UNIX + i64::from(week) * SECONDS_PER_WEEK;
+        let base_s = GPS_EPOCH_UNIX + i64::from(week) * SECONDS_PER_WEEK_I64;
         let units_i = base_s.saturating_mul(k.units_per_s);
         return Ok(Some((
             week,

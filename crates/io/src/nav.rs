@@ -10,6 +10,7 @@ use crate::fmt::{
 };
 use nalgebra::Vector3;
 use navfuse_core::attitude::{euler_from_q_bn, q_bn_from_euler, wrap_2pi};
+use navfuse_core::time::SECONDS_PER_WEEK;
 use navfuse_core::{ImuErrors, NavState};
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -440,7 +441,7 @@ pub fn read_nav(path: &Path) -> Result<Vec<(u32, NavState)>, InputError> {
                 format!("expected a latitude in [-90, 90] deg, found {lat}"),
             ));
         }
-        let key = week * 604_800.0 + t;
+        let key = week * SECONDS_PER_WEEK + t;
         match prev {
             Some(p) if key == p => {
                 return Err(InputError::at_field(
@@ -457,7 +458,7 @@ pub fn read_nav(path: &Path) -> Result<Vec<(u32, NavState)>, InputError> {
                     "t",
                     format!(
                         "time {t} goes backwards (previous {})",
-                        p - week * 604_800.0
+                        p - week * SECONDS_PER_WEEK
                     ),
                 ))
             }

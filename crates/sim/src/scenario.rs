@@ -5,6 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use nalgebra::Vector3;
+use navfuse_core::time::SECONDS_PER_WEEK;
 use navfuse_io::error::InputError;
 use serde::Deserialize;
 
@@ -319,7 +320,7 @@ impl Scenario {
                 ),
             ));
         }
-        if !(s.time_s.is_finite() && (0.0..604_800.0).contains(&s.time_s)) {
+        if !(s.time_s.is_finite() && (0.0..SECONDS_PER_WEEK).contains(&s.time_s)) {
             return Err(key_err(
                 path,
                 &text,
