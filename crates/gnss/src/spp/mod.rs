@@ -17,13 +17,9 @@
 //! `t_rx - dt_rx`, so a receiver clock offset of milliseconds (common with u-blox) does
 //! not bias the satellite positions.
 
-use crate::atmosphere::{klobuchar_l1_delay_m, saastamoinen_slant_m};
 use crate::ephemeris::SPEED_OF_LIGHT_MPS;
-use crate::ephemeris_set::EphemerisSet;
-use crate::geometry::{az_el, signal_path};
 use crate::time::GpsTime;
 use nalgebra::{Matrix4, Vector3};
-use navfuse_core::earth::c_ne;
 use std::fmt;
 
 mod config;

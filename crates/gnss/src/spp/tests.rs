@@ -2,7 +2,11 @@
 
 use super::config::ura_variance_m2;
 use super::*;
+use crate::atmosphere::{klobuchar_l1_delay_m, saastamoinen_slant_m};
 use crate::constellation::nominal_gps24;
+use crate::ephemeris_set::EphemerisSet;
+use crate::geometry::{az_el, signal_path};
+use navfuse_core::earth::c_ne;
 use navfuse_core::earth::lla_to_ecef;
 
 const ALPHA: [f64; 4] = [1.1176e-8, 1.4901e-8, -5.9605e-8, -1.1921e-7];
