@@ -6,7 +6,7 @@ use crate::ephemeris::GpsEphemeris;
 use nalgebra::Vector3;
 
 /// Upper bounds of the URA index intervals [m] (IS-GPS-200 20.3.3.3.1.3), index 0-14.
-pub(super) const URA_BOUNDS_M: [f64; 15] = [
+const URA_BOUNDS_M: [f64; 15] = [
     2.4, 3.4, 4.85, 6.85, 9.65, 13.65, 24.0, 48.0, 96.0, 192.0, 384.0, 768.0, 1536.0, 3072.0,
     6144.0,
 ];

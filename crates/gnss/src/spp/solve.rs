@@ -59,7 +59,7 @@ pub(super) fn true_rx_time(t_rx: GpsTime, clock_bias_m: f64) -> GpsTime {
 }
 
 /// Build the pseudorange rows at (pos, clock) for the active candidates.
-pub(super) fn build_rows(
+fn build_rows(
     cands: &[Candidate<'_>],
     active: &[bool],
     cfg: &SppConfig,
@@ -308,7 +308,7 @@ pub fn solve_epoch(
 
 /// Assemble the solution from an accepted fit.
 #[allow(clippy::too_many_arguments)]
-pub(super) fn finish(
+fn finish(
     cands: &[Candidate<'_>],
     fitted: Fit,
     excluded: Vec<u8>,

@@ -45,7 +45,7 @@ pub(super) enum Kind {
 
 /// A finite number from field `k`.
 #[inline]
-pub(super) fn num(
+fn num(
     path: &Path,
     ln: usize,
     line: &[u8],
@@ -61,7 +61,7 @@ pub(super) fn num(
     }
 }
 
-pub(super) fn vec3(
+fn vec3(
     path: &Path,
     ln: usize,
     line: &[u8],

@@ -124,7 +124,7 @@ impl fmt::Display for ImuReport {
 }
 
 /// How many bridged gaps a warning lists.
-pub(super) const MAX_LISTED_GAPS: usize = 5;
+const MAX_LISTED_GAPS: usize = 5;
 
 impl ImuReport {
     /// The warning listing the gaps bridged (longer than [`MAX_DT_S`]), if any.

@@ -11,7 +11,7 @@ use navfuse_gnss::GpsTime;
 use std::path::Path;
 
 /// Header label of the RINEX 2 observation type list.
-pub(super) const V2_TYPES_LABEL: &str = "# / TYPES OF OBSERV";
+const V2_TYPES_LABEL: &str = "# / TYPES OF OBSERV";
 
 /// A RINEX 2 `# / TYPES OF OBSERV` list being read: `I6,9(4X,A2)`, continuation
 /// lines `6X,9(4X,A2)`.
@@ -85,7 +85,7 @@ pub(super) struct V2Layout {
     idx: [Option<usize>; 4],
 }
 
-pub(super) const V2_NAMES: [&str; 4] = ["C1", "L1", "D1", "S1"];
+const V2_NAMES: [&str; 4] = ["C1", "L1", "D1", "S1"];
 
 impl V2Layout {
     fn new(types: &V2Types) -> Self {
@@ -105,13 +105,7 @@ pub(super) struct V2Sat {
 
 /// Parse satellite `k` (0-based) of `n` in an epoch line or continuation line:
 /// `A1,I2` at columns 33 + 3 (k mod 12).
-pub(super) fn v2_sat(
-    path: &Path,
-    ln: usize,
-    line: &[u8],
-    k: usize,
-    n: usize,
-) -> Result<V2Sat, InputError> {
+fn v2_sat(path: &Path, ln: usize, line: &[u8], k: usize, n: usize) -> Result<V2Sat, InputError> {
     let a = 32 + 3 * (k % 12);
     let id = cols(line, a, a + 3);
     let field = "satellite list";
@@ -177,7 +171,7 @@ pub(super) fn v2_sat(
 
 /// Read the satellite list of a RINEX 2 epoch line (number `ln`) and its continuation
 /// lines (32 blanks, then up to 12 more satellites).
-pub(super) fn v2_sat_list(
+fn v2_sat_list(
     rd: &mut LineReader,
     path: &Path,
     ln: usize,
@@ -223,7 +217,7 @@ pub(super) fn v2_sat_list(
 }
 
 /// Skip `count` lines that belong to the record starting at line `ln`.
-pub(super) fn skip_lines(
+fn skip_lines(
     rd: &mut LineReader,
     path: &Path,
     ln: usize,

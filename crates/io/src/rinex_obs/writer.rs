@@ -30,7 +30,7 @@ pub struct ObsHeader {
 }
 
 /// The four observation types written, in order.
-pub(super) const OBS_TYPES: [&str; 4] = ["C1C", "L1C", "D1C", "S1C"];
+const OBS_TYPES: [&str; 4] = ["C1C", "L1C", "D1C", "S1C"];
 
 /// Signal strength indicator from C/N0 (RINEX 3.04 §5.7 table: 1 < 12 dBHz, 2 12-17,
 /// ..., 8 48-53, 9 >= 54).
@@ -46,12 +46,12 @@ pub struct RinexObsWriter<W: Write> {
     w: W,
 }
 
-pub(super) fn a20(s: &str) -> String {
+fn a20(s: &str) -> String {
     s.chars().take(20).collect()
 }
 
 /// `F14.3` or an error if the value does not fit 14 characters.
-pub(super) fn f14_3(v: f64) -> io::Result<String> {
+fn f14_3(v: f64) -> io::Result<String> {
     let s = format!("{v:14.3}");
     if !v.is_finite() || s.len() > 14 {
         return Err(io::Error::new(
