@@ -5,7 +5,7 @@
 //! `#` / `%` comment lines and blank lines are skipped anywhere; the first other line
 //! must be the header `t_s,prn,prc_m,rrc_mps,iode`. Records: t_s [GPS s of week, in
 //! [0, 604800)],
-//! prn (GPS 1-32), prc_m [m], rrc_mps [m/s], iode (integer 0-65535; empty or left out
+//! prn (GPS 1-32), prc_m \[m\], rrc_mps [m/s], iode (integer 0-65535; empty or left out
 //! means unknown). Times must not decrease, except at a GPS week rollover (a
 //! drop of more than half a week): the following times are moved on by 604800 s, so
 //! the list keeps one continuous scale (seconds of the first record's week). The
@@ -25,7 +25,7 @@ use std::path::Path;
 #[derive(Clone, Debug, PartialEq)]
 pub struct DgpsFile {
     pub corrections: Vec<DgpsCorrection>,
-    /// Reference station latitude [rad], longitude [rad], ellipsoidal height [m],
+    /// Reference station latitude \[rad\], longitude \[rad\], ellipsoidal height \[m\],
     /// when a comment line gives it.
     pub reference_lla: Option<Vector3<f64>>,
 }

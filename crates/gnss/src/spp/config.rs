@@ -38,9 +38,9 @@ impl IonoModel {
 /// 5 m and 3 m without an iono / tropo model, broadcast URA).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SppErrorModel {
-    /// Constant term a of sigma_el^2 = F^2 (a^2 + b^2 / sin^p el) [m].
+    /// Constant term a of sigma_el^2 = F^2 (a^2 + b^2 / sin^p el) \[m\].
     pub sigma_a_m: f64,
-    /// Elevation term b [m].
+    /// Elevation term b \[m\].
     pub sigma_b_m: f64,
     /// Error factor F for the system (GPS: 1).
     pub error_factor: f64,
@@ -51,21 +51,21 @@ pub struct SppErrorModel {
     /// Add the broadcast user range accuracy squared, the RINEX value rounded up to
     /// the IS-GPS-200 20.3.3.3.1.3 URA bound (2.4, 3.4, 4.85, ... 6144 m).
     pub use_ura: bool,
-    /// Code bias (TGD / receiver) error [m].
+    /// Code bias (TGD / receiver) error \[m\].
     pub code_bias_sigma_m: f64,
     /// Klobuchar model error as a fraction of the modelled delay.
     pub iono_model_fraction: f64,
-    /// Ionospheric error without a model [m].
+    /// Ionospheric error without a model \[m\].
     pub iono_none_sigma_m: f64,
-    /// Saastamoinen model error s, mapped as s / (sin el + 0.1) [m].
+    /// Saastamoinen model error s, mapped as s / (sin el + 0.1) \[m\].
     pub tropo_model_sigma_m: f64,
-    /// Tropospheric error without a model [m].
+    /// Tropospheric error without a model \[m\].
     pub tropo_none_sigma_m: f64,
     /// Error left after a DGPS correction (reference station noise and multipath,
-    /// spatial and temporal decorrelation) [m]; replaces the URA, code bias, iono and
+    /// spatial and temporal decorrelation) \[m\]; replaces the URA, code bias, iono and
     /// tropo terms for a corrected satellite.
     pub dgps_sigma_m: f64,
-    /// Doppler error [Hz] (sets the velocity covariance; the velocity fit is
+    /// Doppler error \[Hz\] (sets the velocity covariance; the velocity fit is
     /// unweighted).
     pub doppler_sigma_hz: f64,
 }
@@ -100,7 +100,7 @@ impl SppErrorModel {
 /// SPP settings.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SppConfig {
-    /// Elevation mask [rad] (default 10 deg).
+    /// Elevation mask \[rad\] (default 10 deg).
     pub elevation_mask_rad: f64,
     /// Ionospheric correction (default none; use `IonoModel::from_broadcast`).
     pub iono: IonoModel,
@@ -110,7 +110,7 @@ pub struct SppConfig {
     pub errors: SppErrorModel,
     /// Maximum Gauss-Newton iterations per solution (default 10).
     pub max_iterations: usize,
-    /// Convergence: norm of the state update (position and clock) below this [m].
+    /// Convergence: norm of the state update (position and clock) below this \[m\].
     pub convergence_m: f64,
     /// Chi-square test of the weighted residuals with fault exclusion (default on).
     pub fde: bool,
@@ -123,7 +123,7 @@ pub struct SppConfig {
 }
 
 impl SppConfig {
-    /// Modelled (ionospheric, tropospheric) L1 delays [m] for a receiver at `lla`
+    /// Modelled (ionospheric, tropospheric) L1 delays \[m\] for a receiver at `lla`
     /// (rad, rad, m), a satellite at `az_rad`, `el_rad`, at `sow` (GPS s of week):
     /// Klobuchar (IS-GPS-200 20.3.3.5.2.5) and Saastamoinen as configured, else 0.
     pub fn atmosphere_m(

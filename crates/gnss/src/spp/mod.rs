@@ -31,9 +31,9 @@ mod velocity;
 pub use config::{IonoModel, SppConfig, SppErrorModel};
 pub use solve::{solve_epoch, SppSolver};
 
-/// GPS L1 carrier frequency [Hz] (IS-GPS-200 3.3.1.1).
+/// GPS L1 carrier frequency \[Hz\] (IS-GPS-200 3.3.1.1).
 pub const GPS_L1_HZ: f64 = 1_575.42e6;
-/// GPS L1 wavelength c / f_L1 [m] (0.1903 m).
+/// GPS L1 wavelength c / f_L1 \[m\] (0.1903 m).
 pub const GPS_L1_WAVELENGTH_M: f64 = SPEED_OF_LIGHT_MPS / GPS_L1_HZ;
 
 /// Satellites needed to identify (not only detect) one faulty measurement: with
@@ -50,12 +50,12 @@ const NEAR_SURFACE_MIN_H_M: f64 = -100e3;
 pub struct SppMeasurement {
     /// GPS PRN.
     pub prn: u8,
-    /// C1C pseudorange [m].
+    /// C1C pseudorange \[m\].
     pub pseudorange_m: f64,
-    /// D1C Doppler [Hz] (positive when the satellite approaches), if measured.
+    /// D1C Doppler \[Hz\] (positive when the satellite approaches), if measured.
     pub doppler_hz: Option<f64>,
     /// DGPS correction to add to the pseudorange, evaluated at this epoch
-    /// (prc + rrc (t - t_s), `dgps::DgpsCorrection::at_m`) [m]. When present the
+    /// (prc + rrc (t - t_s), `dgps::DgpsCorrection::at_m`) \[m\]. When present the
     /// ionosphere and troposphere models are not applied to this satellite (the
     /// correction contains them) and its variance uses `dgps_sigma_m`.
     pub dgps_prc_m: Option<f64>,
@@ -65,17 +65,17 @@ pub struct SppMeasurement {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SppSatellite {
     pub prn: u8,
-    /// Azimuth from north, clockwise [rad].
+    /// Azimuth from north, clockwise \[rad\].
     pub az_rad: f64,
-    /// Elevation [rad].
+    /// Elevation \[rad\].
     pub el_rad: f64,
-    /// Post-fit pseudorange residual, measured minus modelled [m].
+    /// Post-fit pseudorange residual, measured minus modelled \[m\].
     pub residual_m: f64,
-    /// A priori 1-sigma of the pseudorange [m].
+    /// A priori 1-sigma of the pseudorange \[m\].
     pub sigma_m: f64,
-    /// Modelled ionospheric delay [m].
+    /// Modelled ionospheric delay \[m\].
     pub iono_m: f64,
-    /// Modelled tropospheric delay [m].
+    /// Modelled tropospheric delay \[m\].
     pub tropo_m: f64,
     /// Doppler range-rate residual [m/s], when the velocity was solved with it.
     pub range_rate_residual_mps: Option<f64>,
@@ -97,11 +97,11 @@ pub struct SppSolution {
     pub t: GpsTime,
     /// Time of validity: `t - clock_bias_m / c` (what RTKLIB writes as the epoch).
     pub t_fix: GpsTime,
-    /// Antenna position, ECEF [m].
+    /// Antenna position, ECEF \[m\].
     pub pos_ecef_m: Vector3<f64>,
-    /// Latitude [rad], longitude [rad], ellipsoidal height [m].
+    /// Latitude \[rad\], longitude \[rad\], ellipsoidal height \[m\].
     pub lla: Vector3<f64>,
-    /// Receiver clock bias c dt_rx [m].
+    /// Receiver clock bias c dt_rx \[m\].
     pub clock_bias_m: f64,
     /// Antenna velocity, ECEF [m/s], when at least 4 used satellites have Doppler.
     pub vel_ecef_mps: Option<Vector3<f64>>,
@@ -124,7 +124,7 @@ pub struct SppSolution {
     pub dops: Dops,
     /// Covariance of (x, y, z, c dt_rx) from the a priori weights [m^2].
     pub cov_m2: Matrix4<f64>,
-    /// Position 1-sigma north, east, down [m] (from `cov_m2`).
+    /// Position 1-sigma north, east, down \[m\] (from `cov_m2`).
     pub std_ned_m: Vector3<f64>,
     /// Velocity 1-sigma north, east, down [m/s] (from the Doppler sigma).
     pub vel_std_ned_mps: Option<Vector3<f64>>,

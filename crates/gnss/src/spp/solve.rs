@@ -198,7 +198,7 @@ pub(super) fn dops(rows: &[Row], lla: &Vector3<f64>) -> Option<Dops> {
     })
 }
 
-/// Solve one epoch. `start` is the initial (position ECEF [m], clock bias [m]), e.g.
+/// Solve one epoch. `start` is the initial (position ECEF \[m\], clock bias \[m\]), e.g.
 /// the previous solution; `None` starts at the Earth centre with zero clock. A fit
 /// that fails from `start` is retried from the Earth centre.
 pub fn solve_epoch(

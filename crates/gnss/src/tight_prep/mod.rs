@@ -5,7 +5,7 @@
 //! DGPS correction or the Klobuchar and Saastamoinen models). See docs/GNSS.md,
 //! "Tight-coupling measurements and DGPS".
 //!
-//! Conventions (P pseudorange, L carrier [cycles], D Doppler [Hz], I and T the
+//! Conventions (P pseudorange, L carrier \[cycles\], D Doppler \[Hz\], I and T the
 //! broadcast model delays at the receiver, I_s and T_s at the DGPS station):
 //! `P = rho + c dt_r - c (dt_sv - TGD) + I + T`, `lambda L = rho + c dt_r - c dt_sv - I +
 //! T + lambda N`. Prepared:
@@ -46,9 +46,9 @@ pub struct TightPrepConfig {
     /// Elevation mask, ionosphere model, troposphere model, error model (incl.
     /// `dgps_sigma_m`) and FDE, for both the SPP and the prepared measurements.
     pub spp: SppConfig,
-    /// Oldest DGPS correction used [s] (default 30).
+    /// Oldest DGPS correction used \[s\] (default 30).
     pub dgps_max_age_s: f64,
-    /// Carrier phase 1-sigma at zenith [m] (default 0.003), elevation weighted like the
+    /// Carrier phase 1-sigma at zenith \[m\] (default 0.003), elevation weighted like the
     /// code: times sqrt(var_el(el) / var_el(90 deg)).
     pub carrier_sigma_m: f64,
     /// Range-rate (Doppler) 1-sigma at zenith [m/s], elevation weighted the same way

@@ -20,15 +20,15 @@ pub struct ImuReport {
     pub truncated_lines: usize,
     /// Samples dropped because their time tag equals the previous one.
     pub duplicates: usize,
-    /// The first few (at most [`MAX_DUPLICATE_TIMES`]) duplicate time tags [s].
+    /// The first few (at most [`MAX_DUPLICATE_TIMES`](super::MAX_DUPLICATE_TIMES)) duplicate time tags \[s\].
     pub duplicate_times: Vec<f64>,
-    /// Intervals (t_{k-1}, t_k) longer than 1.5 / rate_hz [s].
+    /// Intervals (t_{k-1}, t_k) longer than 1.5 / rate_hz \[s\].
     pub gaps: Vec<(f64, f64)>,
-    /// Nominal sample interval 1 / rate_hz [s].
+    /// Nominal sample interval 1 / rate_hz \[s\].
     pub nominal_dt: f64,
-    /// Time tag of the first sample read (after the offset) [s].
+    /// Time tag of the first sample read (after the offset) \[s\].
     pub first_t: Option<f64>,
-    /// Time tag of the last sample read [s].
+    /// Time tag of the last sample read \[s\].
     pub last_t: Option<f64>,
     /// What was done with intervals longer than [`MAX_DT_S`].
     pub gap_policy: GapPolicy,

@@ -10,11 +10,11 @@ use std::io::{self, Write};
 #[derive(Clone, Debug, PartialEq)]
 pub struct ObsHeader {
     pub marker_name: String,
-    /// `APPROX POSITION XYZ` [m].
+    /// `APPROX POSITION XYZ` \[m\].
     pub approx_pos_ecef_m: Vector3<f64>,
-    /// `ANTENNA: DELTA H/E/N` (height, east, north) [m].
+    /// `ANTENNA: DELTA H/E/N` (height, east, north) \[m\].
     pub antenna_delta_hen_m: Vector3<f64>,
-    /// `INTERVAL` [s]; None leaves the record out.
+    /// `INTERVAL` \[s\]; None leaves the record out.
     pub interval_s: Option<f64>,
     /// `TIME OF FIRST OBS` (GPST).
     pub first_obs: GpsTime,

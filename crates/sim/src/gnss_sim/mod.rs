@@ -29,7 +29,7 @@ mod spec;
 pub use processes::{elevation_scale, iono_obliquity, SmoothGm};
 pub use spec::{DgpsSpec, ErrorBudget, EventSpec, FixSpec, GnssSpec, HeadingSpec, SpoofMode};
 
-/// GPS L1 frequency [Hz] and wavelength [m].
+/// GPS L1 frequency \[Hz\] and wavelength \[m\].
 pub const L1_HZ: f64 = 1_575.42e6;
 pub const L1_WAVELENGTH_M: f64 = SPEED_OF_LIGHT_MPS / L1_HZ;
 /// Ionosphere single-layer height [m] and mean Earth radius [m] for the obliquity.
@@ -58,7 +58,7 @@ struct SatProc {
     lli_pending: bool,
 }
 
-/// Error components of one pseudorange [m] (slant), for gnss_errors.csv.
+/// Error components of one pseudorange \[m\] (slant), for gnss_errors.csv.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ErrorParts {
     pub iono: f64,
@@ -96,7 +96,7 @@ pub struct SatEpoch {
     /// without a correction for this satellite).
     pub dgps_residual: Option<ErrorParts>,
     pub dgps_age_s: Option<f64>,
-    /// Spoofing-induced range change [m] (0 when not spoofed).
+    /// Spoofing-induced range change \[m\] (0 when not spoofed).
     pub spoof_range_m: f64,
 }
 
@@ -106,7 +106,7 @@ pub struct DgpsCorrection {
     /// Time the correction refers to (GPS s of week).
     pub t: f64,
     pub prn: u8,
-    /// Add to the measured pseudorange [m].
+    /// Add to the measured pseudorange \[m\].
     pub prc_m: f64,
     /// Its rate [m/s]: correction at t' = prc + rrc (t' - t).
     pub rrc_mps: f64,
@@ -134,11 +134,11 @@ pub struct GnssEpoch {
     /// Visible and tracked satellites (empty during an outage).
     pub sats: Vec<SatEpoch>,
     pub fix: Option<Fix>,
-    /// Dual-antenna heading [rad] and its std [rad].
+    /// Dual-antenna heading \[rad\] and its std \[rad\].
     pub heading: Option<(f64, f64)>,
     /// Corrections computed at this epoch (written to dgps.csv).
     pub corrections: Vec<DgpsCorrection>,
-    /// Receiver clock bias [m] (truth).
+    /// Receiver clock bias \[m\] (truth).
     pub rx_clock_m: f64,
     /// Active spoofing offset of the antenna position (NED, m), if any.
     pub spoof_offset_ned: Option<Vector3<f64>>,

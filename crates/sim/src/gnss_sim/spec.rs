@@ -11,7 +11,7 @@ use crate::trajectory::Trajectory;
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GnssSpec {
-    /// Epoch rate [Hz]; must divide the IMU rate.
+    /// Epoch rate \[Hz\]; must divide the IMU rate.
     #[serde(default = "one")]
     pub rate_hz: f64,
     /// "nominal24" (bundled 24-slot GPS constellation), "seed000" (seed 000 Table 3's
@@ -20,10 +20,10 @@ pub struct GnssSpec {
     pub constellation: String,
     /// RINEX navigation file (relative to the scenario file) for `constellation = "rinex"`.
     pub rinex_nav: Option<String>,
-    /// Elevation mask [deg].
+    /// Elevation mask \[deg\].
     #[serde(default = "ten")]
     pub elevation_mask_deg: f64,
-    /// Antenna phase centre from the IMU centre, IMU frame F-R-D [m].
+    /// Antenna phase centre from the IMU centre, IMU frame F-R-D \[m\].
     #[serde(default)]
     pub antenna_lever_arm_m: [f64; 3],
     /// Write obs.rnx / nav.rnx (raw measurements).
@@ -55,7 +55,7 @@ fn nominal() -> String {
     "nominal24".into()
 }
 
-/// `[gnss.errors]`: 1-sigma of each source [m] and its correlation time [s]. Defaults:
+/// `[gnss.errors]`: 1-sigma of each source \[m\] and its correlation time \[s\]. Defaults:
 /// seed 000 Table 1, GPS column (SA on). Ionosphere and troposphere are zenith values
 /// (slant = mapping x zenith); multipath and receiver noise are zenith values scaled by
 /// sqrt((1 + 1/sin² el) / 2).
@@ -93,10 +93,10 @@ pub struct ErrorBudget {
     pub sa_m: f64,
     #[serde(default = "d_120")]
     pub sa_tau_s: f64,
-    /// Carrier-phase white noise at zenith [m].
+    /// Carrier-phase white noise at zenith \[m\].
     #[serde(default = "d_phase_noise")]
     pub phase_noise_m: f64,
-    /// Carrier-phase multipath at zenith [m] (tau = multipath_tau_s).
+    /// Carrier-phase multipath at zenith \[m\] (tau = multipath_tau_s).
     #[serde(default = "d_phase_mp")]
     pub phase_multipath_m: f64,
     /// Doppler white noise at zenith [m/s].
@@ -170,12 +170,12 @@ impl Default for ErrorBudget {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FixSpec {
-    /// Horizontal (per axis) and vertical 1-sigma [m], also the reported std.
+    /// Horizontal (per axis) and vertical 1-sigma \[m\], also the reported std.
     #[serde(default = "d_fix_h")]
     pub horizontal_std_m: f64,
     #[serde(default = "d_fix_v")]
     pub vertical_std_m: f64,
-    /// Correlation time of the position error [s]; 0 = white.
+    /// Correlation time of the position error \[s\]; 0 = white.
     #[serde(default = "d_fix_tau")]
     pub corr_time_s: f64,
     /// Velocity 1-sigma per axis [m/s] (white); also reported.
@@ -206,10 +206,10 @@ fn d_four() -> usize {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct HeadingSpec {
-    /// Baseline from the primary to the secondary antenna, IMU frame [m].
+    /// Baseline from the primary to the secondary antenna, IMU frame \[m\].
     #[serde(default = "d_baseline")]
     pub baseline_m: [f64; 3],
-    /// Heading 1-sigma [deg]; default 0.3 deg x 1.2 m / baseline length.
+    /// Heading 1-sigma \[deg\]; default 0.3 deg x 1.2 m / baseline length.
     pub std_deg: Option<f64>,
 }
 
@@ -221,7 +221,7 @@ fn d_baseline() -> [f64; 3] {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DgpsSpec {
-    /// Distance [km] and bearing [deg] of the reference station from the start.
+    /// Distance \[km\] and bearing \[deg\] of the reference station from the start.
     #[serde(default = "d_dgps_b")]
     pub baseline_km: f64,
     #[serde(default = "d_45")]
@@ -241,7 +241,7 @@ pub struct DgpsSpec {
     pub orbit_residual_m: f64,
     #[serde(default = "d_dgps_b")]
     pub residual_baseline_km: f64,
-    /// The reference station's own multipath and noise at zenith [m].
+    /// The reference station's own multipath and noise at zenith \[m\].
     #[serde(default = "d_ref")]
     pub ref_multipath_m: f64,
     #[serde(default = "d_ref")]

@@ -30,7 +30,7 @@ impl TrueImuErrors {
     }
 
     /// KF-GINS `IMU_ERR` columns 2-13 (docs/FORMATS.md): gyro bias [deg/h], accel bias
-    /// [mGal], gyro scale [ppm], accel scale [ppm].
+    /// \[mGal\], gyro scale \[ppm\], accel scale \[ppm\].
     pub fn kf_gins_columns(&self) -> [f64; 12] {
         let mut out = [0.0; 12];
         for i in 0..3 {

@@ -48,7 +48,7 @@ pub struct SensorErrors {
     pub turn_on_bias_sigma: f64,
     /// Bias instability `B`, IEEE 952 convention (Allan floor 0.664 B) [rad/s | m/s²].
     pub bias_instability: f64,
-    /// Correlation time of the bias-instability Gauss-Markov process [s].
+    /// Correlation time of the bias-instability Gauss-Markov process \[s\].
     pub bias_corr_time_s: f64,
     /// White noise density: ARW [rad/sqrt(s)] | VRW [m/s/sqrt(s)].
     pub white_noise_density: f64,
@@ -56,7 +56,7 @@ pub struct SensorErrors {
     pub rate_random_walk: f64,
     /// Scale-factor error sigma [-] (1e-6 = 1 ppm).
     pub scale_sigma: f64,
-    /// Axis misalignment (non-orthogonality) sigma per off-diagonal term [rad].
+    /// Axis misalignment (non-orthogonality) sigma per off-diagonal term \[rad\].
     pub misalignment_sigma_rad: f64,
     /// Quantisation step of the increment output [rad | m/s]; 0 = none.
     pub quantization: f64,
@@ -205,7 +205,7 @@ pub struct ImuSpec {
     /// One of [`PRESET_NAMES`].
     #[serde(default = "default_grade")]
     pub grade: String,
-    /// Output rate [Hz].
+    /// Output rate \[Hz\].
     #[serde(default = "default_rate_hz")]
     pub rate_hz: f64,
     #[serde(default)]

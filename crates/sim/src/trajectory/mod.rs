@@ -2,7 +2,7 @@
 //! go with them.
 //!
 //! The truth is the solution of the same WGS-84 rotating-Earth kinematics the
-//! navigator mechanizes (SYSTEM.md §1): normal gravity [`gravity_normal`], earth rate
+//! navigator mechanizes (SYSTEM.md §1): normal gravity [`gravity_normal`](navfuse_core::earth::gravity_normal), earth rate
 //! and transport rate. Each segment gives the rates of speed and of the Euler angles
 //! (or, for a body-frame profile, the specific force and Euler rates); one ODE
 //! integrates position, velocity, attitude **and the IMU increments**
@@ -88,9 +88,9 @@ pub enum Segment {
 pub struct Start {
     /// GPS time of the start [s of week].
     pub t0: f64,
-    /// Latitude, longitude [rad], ellipsoidal height [m] of the IMU.
+    /// Latitude, longitude \[rad\], ellipsoidal height \[m\] of the IMU.
     pub lla: Vector3<f64>,
-    /// Initial heading [rad].
+    /// Initial heading \[rad\].
     pub heading_rad: f64,
     /// Initial speed along the body x axis [m/s].
     pub speed_mps: f64,
@@ -478,18 +478,18 @@ impl Trajectory {
         })
     }
 
-    /// GPS time of the start [s].
+    /// GPS time of the start \[s\].
     pub fn t_start(&self) -> f64 {
         self.start.t0
     }
 
-    /// GPS time of the end [s].
+    /// GPS time of the end \[s\].
     pub fn t_end(&self) -> f64 {
         let c = self.segs.last().expect("validated non-empty");
         c.t_start + c.duration
     }
 
-    /// Total duration [s].
+    /// Total duration \[s\].
     pub fn duration(&self) -> f64 {
         self.t_end() - self.t_start()
     }

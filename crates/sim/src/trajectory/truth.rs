@@ -15,7 +15,7 @@ use navfuse_core::types::ImuSample;
 pub struct Rig {
     /// C_b^m: IMU frame to vehicle frame (SYSTEM.md §4b: C_b^m = I - (dalpha x)).
     pub c_bm: Matrix3<f64>,
-    /// Lever arm from the IMU to the vehicle reference point, IMU frame [m]
+    /// Lever arm from the IMU to the vehicle reference point, IMU frame \[m\]
     /// (SYSTEM.md §4b l^b).
     pub lever_b: Vector3<f64>,
 }
@@ -31,7 +31,7 @@ impl Default for Rig {
 
 impl Rig {
     /// From mounting angles (roll, pitch, yaw of the IMU frame relative to the vehicle
-    /// frame, ZYX) [rad] and the lever arm [m].
+    /// frame, ZYX) \[rad\] and the lever arm \[m\].
     pub fn new(mount_rpy_rad: &Vector3<f64>, lever_b: Vector3<f64>) -> Self {
         Rig {
             c_bm: c_bn_from_euler(mount_rpy_rad),
@@ -56,7 +56,7 @@ const DV: usize = 13;
 pub struct TruthSample {
     /// GPS time [s of week].
     pub t: f64,
-    /// IMU latitude, longitude [rad], ellipsoidal height [m].
+    /// IMU latitude, longitude \[rad\], ellipsoidal height \[m\].
     pub lla: Vector3<f64>,
     /// IMU NED velocity [m/s].
     pub v_n: Vector3<f64>,
@@ -74,12 +74,12 @@ pub struct TruthSample {
 }
 
 impl TruthSample {
-    /// Velocity [m/s] (NED) of a point at `lever_b` [m] (IMU frame) from the IMU.
+    /// Velocity [m/s] (NED) of a point at `lever_b` \[m\] (IMU frame) from the IMU.
     pub fn velocity_at(&self, lever_b: &Vector3<f64>) -> Vector3<f64> {
         self.v_n + self.c_bn * self.w_eb_b.cross(lever_b)
     }
 
-    /// Roll, pitch, yaw of the IMU [rad] (yaw in (-pi, pi]).
+    /// Roll, pitch, yaw of the IMU \[rad\] (yaw in (-pi, pi]).
     pub fn euler(&self) -> Vector3<f64> {
         navfuse_core::attitude::euler_from_c_bn(&self.c_bn)
     }
@@ -219,7 +219,7 @@ impl<'a> TruthGenerator<'a> {
         g
     }
 
-    /// IMU interval [s].
+    /// IMU interval \[s\].
     pub fn dt(&self) -> f64 {
         self.dt
     }
