@@ -107,7 +107,7 @@ pub struct SatState {
 
 /// Eccentric anomaly from mean anomaly by Newton iteration (IS-GPS-200 Table 20-IV,
 /// Kepler's equation M = E - e sin E) to 1e-13 rad.
-pub fn solve_kepler(m_rad: f64, e: f64) -> f64 {
+pub(crate) fn solve_kepler(m_rad: f64, e: f64) -> f64 {
     let mut ek = m_rad;
     for _ in 0..KEPLER_MAX_ITER {
         let f = ek - e * ek.sin() - m_rad;

@@ -26,7 +26,8 @@ mod epoch;
 mod processes;
 mod spec;
 
-pub use processes::{elevation_scale, iono_obliquity, SmoothGm};
+use processes::SmoothGm;
+pub use processes::{elevation_scale, iono_obliquity};
 pub use spec::{DgpsSpec, ErrorBudget, EventSpec, FixSpec, GnssSpec, HeadingSpec, SpoofMode};
 
 /// GPS L1 frequency \[Hz\] and wavelength \[m\].

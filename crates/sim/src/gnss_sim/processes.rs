@@ -9,7 +9,7 @@ use crate::random::Stream;
 /// sigma², cov(x, y) = var(y) = sigma². The rate y' exists, so Doppler is consistent.
 /// Exact discretisation: Phi = e^{-dt/tau} [[1, 0], [dt/tau, 1]], Q = P - Phi P Phi^T.
 #[derive(Clone, Debug)]
-pub struct SmoothGm {
+pub(crate) struct SmoothGm {
     tau: f64,
     sigma: f64,
     x: f64,

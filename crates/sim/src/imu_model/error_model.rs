@@ -130,7 +130,7 @@ impl Triad {
 /// Quantise to multiples of `lsb`, carrying the remainder to the next sample so the
 /// running sum of the output never differs from the running sum of the input by
 /// more than `lsb / 2` (no bias of the mean).
-pub fn quantize(v: &Vector3<f64>, lsb: f64, residual: &mut Vector3<f64>) -> Vector3<f64> {
+pub(crate) fn quantize(v: &Vector3<f64>, lsb: f64, residual: &mut Vector3<f64>) -> Vector3<f64> {
     let mut out = Vector3::zeros();
     for i in 0..3 {
         let want = v[i] + residual[i];

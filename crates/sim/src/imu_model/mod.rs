@@ -25,7 +25,7 @@ mod error_model;
 #[cfg(test)]
 mod tests;
 
-pub use error_model::{quantize, ImuErrorModel, TrueImuErrors};
+pub use error_model::{ImuErrorModel, TrueImuErrors};
 
 /// Standard gravity for mg / µg conversions [m/s²] (CGPM 1901).
 pub const G0_MPS2: f64 = 9.806_65;

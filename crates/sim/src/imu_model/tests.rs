@@ -1,5 +1,6 @@
 //! Tests of the IMU grades and the error model.
 
+use super::error_model::quantize;
 use super::*;
 use nalgebra::Vector3;
 
