@@ -21,7 +21,7 @@
 //!   each other (consecutive innovations change by less than their 3-sigma) for
 //!   `readmit_s`, so a short burst of bad fixes, however consistent, stays out.
 
-use crate::filter::chi2_threshold;
+use crate::chi2::chi2_threshold;
 use nalgebra::Vector3;
 use std::collections::VecDeque;
 

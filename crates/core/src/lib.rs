@@ -11,6 +11,7 @@
 pub mod aiding;
 pub mod alignment;
 pub mod attitude;
+pub mod chi2;
 pub mod config;
 pub mod earth;
 pub mod error_model;
@@ -25,6 +26,7 @@ pub mod outage;
 pub mod six_state;
 pub mod state;
 pub mod static_detect;
+pub mod time;
 pub mod types;
 
 pub use aiding::source::{AidingSource, Fuser, Handled};

@@ -116,7 +116,7 @@ pub struct RtklibExplorerImuOptions {
 /// Where the IMU data come from.
 #[derive(Clone, Debug, PartialEq)]
 pub enum ImuFormat {
-    /// KF-GINS text: t, dtheta xyz [rad], dvel xyz [m/s]; 7 columns or more.
+    /// KF-GINS text: t, dtheta xyz \[rad\], dvel xyz [m/s]; 7 columns or more.
     KfGins,
     Csv(CsvImuOptions),
     RtklibExplorer(RtklibExplorerImuOptions),
@@ -144,9 +144,9 @@ impl Default for GapPolicy {
 pub struct ImuSource {
     pub path: PathBuf,
     pub format: ImuFormat,
-    /// Nominal sample rate [Hz]; used for the first interval and after gaps.
+    /// Nominal sample rate \[Hz\]; used for the first interval and after gaps.
     pub rate_hz: f64,
-    /// Sensor-to-body rotation, ZYX Euler (roll, pitch, yaw) [deg]:
+    /// Sensor-to-body rotation, ZYX Euler (roll, pitch, yaw) \[deg\]:
     /// v_body = Rz(yaw) Ry(pitch) Rx(roll) v_sensor. Zero for KF-GINS files.
     pub sensor_to_body_rpy_deg: [f64; 3],
     /// Seconds added to every IMU time tag (latency correction).
@@ -157,7 +157,7 @@ pub struct ImuSource {
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum GnssFormat {
-    /// KF-GINS: t, lat, lon [deg], h [m], std N E D [m] (7 columns); 13 columns add
+    /// KF-GINS: t, lat, lon \[deg\], h \[m\], std N E D \[m\] (7 columns); 13 columns add
     /// vel N E D [m/s] and its std.
     KfGins,
     /// RTKLIB solution (.pos), lat/lon/height form, optional velocity columns.
@@ -186,7 +186,7 @@ pub enum Coupling {
 pub struct RinexGnss {
     pub nav_path: PathBuf,
     pub coupling: Coupling,
-    /// Satellites below this elevation are not used [deg].
+    /// Satellites below this elevation are not used \[deg\].
     pub elevation_mask_deg: f64,
     /// Single point positioning's residual test with fault exclusion. Off for data
     /// whose errors the broadcast error model does not cover (e.g. Selective
@@ -200,7 +200,7 @@ pub struct RinexGnss {
 #[derive(Clone, Debug, PartialEq)]
 pub struct DgpsSource {
     pub kind: DgpsKind,
-    /// Corrections older than this are not applied [s].
+    /// Corrections older than this are not applied \[s\].
     pub max_age_s: f64,
 }
 
@@ -209,7 +209,7 @@ pub enum DgpsKind {
     /// A corrections file (`t_s,prn,prc_m,rrc_mps,iode`, docs/FORMATS.md).
     Corrections(PathBuf),
     /// A reference station's RINEX observations at a known position
-    /// (latitude, longitude [rad], ellipsoidal height [m]).
+    /// (latitude, longitude \[rad\], ellipsoidal height \[m\]).
     ReferenceStation {
         obs_path: PathBuf,
         position_lla: [f64; 3],
@@ -220,7 +220,7 @@ pub enum DgpsKind {
 pub struct GnssSource {
     pub path: PathBuf,
     pub format: GnssFormat,
-    /// Keep only epochs within 1 ms of a multiple of this interval [s] (e.g. 1.0 to
+    /// Keep only epochs within 1 ms of a multiple of this interval \[s\] (e.g. 1.0 to
     /// turn 4 Hz into 1 Hz); None keeps all.
     pub decimate_s: Option<f64>,
     /// Seconds added to every GNSS time tag.
@@ -230,7 +230,7 @@ pub struct GnssSource {
 /// What to write and how often.
 #[derive(Clone, Debug, PartialEq)]
 pub struct OutputSpec {
-    /// Output rate [Hz]; None = every IMU epoch (KF-GINS behaviour).
+    /// Output rate \[Hz\]; None = every IMU epoch (KF-GINS behaviour).
     pub rate_hz: Option<f64>,
     /// `solution.nav` (KF-GINS 11 columns) is always written.
     /// `imu_err.txt` (KF-GINS IMU_ERR, 13 columns).
