@@ -48,7 +48,7 @@ impl AidingSource for KnownHeight {
             h,
             r: DMatrix::from_element(1, 1, self.std_m * self.std_m),
         };
-        let gate = Some(navfuse_core::filter::chi2_threshold(1, 1e-4));
+        let gate = Some(navfuse_core::chi2::chi2_threshold(1, 1e-4));
         f.fuse_rows("known_height", &lin, gate, true);
     }
 }

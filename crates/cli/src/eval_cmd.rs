@@ -11,7 +11,7 @@ use navfuse_io::nav::read_nav;
 use serde_json::{json, Value};
 use std::path::Path;
 
-const WEEK_S: f64 = 604_800.0;
+use navfuse_core::time::SECONDS_PER_WEEK as WEEK_S;
 
 /// A trajectory with its GPS week (0 = unknown, times are seconds of week).
 pub(crate) struct Track {

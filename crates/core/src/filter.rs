@@ -7,7 +7,6 @@
 use nalgebra::{DMatrix, DVector};
 
 /// The chi-square gate threshold moved to [`crate::chi2`]; re-exported for the engine.
-pub use crate::chi2::chi2_threshold;
 
 /// Result of one measurement update.
 #[derive(Clone, Debug)]

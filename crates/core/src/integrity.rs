@@ -19,7 +19,7 @@
 //! again) -> trusted after `readmit_s` of continuous agreement. No file I/O here: the
 //! engine feeds [`EpochCheck`]s and logs the [`Transition`]s.
 
-use crate::filter::chi2_threshold;
+use crate::chi2::chi2_threshold;
 use nalgebra::Vector3;
 use std::collections::VecDeque;
 
