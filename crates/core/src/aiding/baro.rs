@@ -192,28 +192,42 @@ mod tests {
         }
     }
 
+    fn ctx_of<'a>(
+        nav: &'a crate::types::NavState,
+        layout: &'a crate::state::StateLayout,
+        vehicle: VehicleEstimate,
+    ) -> AidingContext<'a> {
+        AidingContext {
+            nav,
+            layout,
+            w_ib_b: Vector3::zeros(),
+            a_n: Vector3::zeros(),
+            lever_arm_b: Vector3::zeros(),
+            vehicle,
+            clock: ReceiverClock::default(),
+            gnss_bias_ned_m: Vector3::zeros(),
+        }
+    }
+
     /// Finite differences: h(x_true) - h(x_est) against H dx.
     #[test]
     fn jacobian_matches_finite_differences() {
         let mut fx = context_fixture(false);
+        fx.nav.t = 0.0;
         let bias_i = fx.layout.push(BARO_BIAS);
         let lever = Vector3::new(0.3, -0.2, 0.15);
         let z = BaroSample {
             t: 0.0,
             height_m: 100.0,
         };
-        let ctx_of = |nav: &crate::types::NavState, vehicle: VehicleEstimate| AidingContext {
-            nav,
-            layout: &fx.layout,
-            w_ib_b: fx.w_ib_b,
-            a_n: Vector3::zeros(),
-            lever_arm_b: Vector3::zeros(),
-            vehicle,
-            clock: ReceiverClock::default(),
-            gnss_bias_ned_m: Vector3::zeros(),
-        };
         let (bias_est, d_bias) = (2.0, 0.03);
-        let est = linearize(&ctx_of(&fx.nav, fx.vehicle), &z, bias_est, &lever, 0.5);
+        let est = linearize(
+            &ctx_of(&fx.nav, &fx.layout, fx.vehicle),
+            &z,
+            bias_est,
+            &lever,
+            0.5,
+        );
         let mut dx = DVector::zeros(fx.layout.len());
         dx[POS + 2] = 0.04;
         dx[ATT] = 2e-4;
@@ -226,7 +240,7 @@ mod tests {
         truth.q_bn =
             quat_from_rotvec(&Vector3::new(dx[ATT], dx[ATT + 1], dx[ATT + 2])) * fx.nav.q_bn;
         let tru = linearize(
-            &ctx_of(&truth, fx.vehicle),
+            &ctx_of(&truth, &fx.layout, fx.vehicle),
             &z,
             bias_est - d_bias,
             &lever,
@@ -235,6 +249,5 @@ mod tests {
         let dy = est.y[0] - tru.y[0];
         let hdx = (&est.h * &dx)[0];
         assert!((dy - hdx).abs() < 1e-6, "dy {dy} H dx {hdx}");
-        fx.nav.t = 0.0;
     }
 }

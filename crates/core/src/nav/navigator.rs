@@ -347,6 +347,7 @@ impl Navigator {
             ));
         }
         summary.aid_status = self.status.clone();
+        summary.source_states = self.ins.source_states();
         self.summary = summary.clone();
         summary
     }
