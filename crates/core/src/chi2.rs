@@ -16,7 +16,7 @@
 
 /// Upper-tail chi-square quantile: the value x with P(X > x) = `p` for `dof` degrees
 /// of freedom (Wilson-Hilferty approximation refined by Newton steps on the exact
-/// CDF for dof <= 6; accurate to better than 0.1 % for p in [1e-9, 0.5] there). For
+/// CDF for dof <= 6; accurate to better than 0.1 % for p in \[1e-9, 0.5\] there). For
 /// dof > 6 it is the Wilson-Hilferty value alone, high by up to ~2.5 % at small p
 /// (see the module documentation); [`chi2_quantile`] is exact at any dof.
 pub fn chi2_threshold(dof: usize, p: f64) -> f64 {
@@ -227,7 +227,7 @@ fn gamma_p(k: usize, x: f64) -> f64 {
 
 /// Chi-square quantile: the x with P(chi2_dof <= x) = `p` (bisection on the exact
 /// CDF, the regularised incomplete gamma function, to 1e-10 relative). `p` is clamped
-/// to [1e-12, 1 - 1e-12]; a non-finite `p` means 0.999. Note the probability is the
+/// to \[1e-12, 1 - 1e-12\]; a non-finite `p` means 0.999. Note the probability is the
 /// lower one (the CDF), unlike [`chi2_threshold`]'s false-alarm probability. Used by
 /// SPP's residual test (any dof; exact at dof > 6 where [`chi2_threshold`] is only
 /// the Wilson-Hilferty approximation).

@@ -29,7 +29,7 @@ const GPS_EPOCH_DAYS_FROM_1970: i64 = 3_657;
 pub struct GpsTime {
     /// GPS week since 1980-01-06.
     pub week: i32,
-    /// Seconds of week [s], in [0, 604800) once normalised.
+    /// Seconds of week \[s\], in [0, 604800) once normalised.
     pub sow: f64,
 }
 
@@ -46,7 +46,7 @@ pub struct GpstCalendar {
     pub hour: u32,
     /// 0-59.
     pub minute: u32,
-    /// Seconds in [0, 60) [s].
+    /// Seconds in [0, 60) \[s\].
     pub second: f64,
 }
 
@@ -74,7 +74,7 @@ impl GpsTime {
         GpsTime { week, sow }
     }
 
-    /// `self - other` [s].
+    /// `self - other` \[s\].
     pub fn diff_s(&self, other: &GpsTime) -> f64 {
         f64::from(self.week - other.week) * SECONDS_PER_WEEK + (self.sow - other.sow)
     }
@@ -168,7 +168,7 @@ pub fn days_in_month(year: i64, month: u32) -> u32 {
     }
 }
 
-/// `dt` wrapped into [-302400, 302400] s (IS-GPS-200 20.3.3.4.3, tk; 20.3.3.3.3.1).
+/// `dt` wrapped into \[-302400, 302400\] s (IS-GPS-200 20.3.3.4.3, tk; 20.3.3.3.3.1).
 pub fn wrap_half_week(dt_s: f64) -> f64 {
     if dt_s > HALF_WEEK_S {
         dt_s - SECONDS_PER_WEEK

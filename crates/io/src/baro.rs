@@ -24,15 +24,15 @@ pub enum BaroQuantity {
     HeightM,
 }
 
-/// A barometer input (`[baro]`).
+/// A barometer input (`\[baro\]`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct BaroSource {
     pub path: PathBuf,
     pub quantity: BaroQuantity,
-    /// Sea-level reference pressure of the pressure altitude [Pa] (QNH; the bias
+    /// Sea-level reference pressure of the pressure altitude \[Pa\] (QNH; the bias
     /// state takes up what it leaves).
     pub reference_pressure_pa: f64,
-    /// Sensor delay removed from the time tags [s].
+    /// Sensor delay removed from the time tags \[s\].
     pub delay_s: f64,
 }
 

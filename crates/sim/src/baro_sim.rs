@@ -1,4 +1,4 @@
-//! Simulated barometer (scenario `[baro]`, docs/SIMULATOR.md): the pressure of the
+//! Simulated barometer (scenario `\[baro\]`, docs/SIMULATOR.md): the pressure of the
 //! true height plus the errors a MEMS barometer shows,
 //!
 //!   h_baro = h_true + b0 + w(t) + A sin(2 pi (t - t0) / P) + v,
@@ -34,31 +34,31 @@ fn default_p_ref() -> f64 {
     ISA_P0_PA
 }
 
-/// `[baro]` of a scenario.
+/// `\[baro\]` of a scenario.
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct BaroSpec {
-    /// Output rate [Hz].
+    /// Output rate \[Hz\].
     #[serde(default = "default_rate")]
     pub rate_hz: f64,
-    /// White noise 1-sigma [m].
+    /// White noise 1-sigma \[m\].
     #[serde(default = "default_noise")]
     pub noise_std_m: f64,
-    /// Offset b0 at the start [m].
+    /// Offset b0 at the start \[m\].
     #[serde(default = "default_bias")]
     pub bias_m: f64,
-    /// Random-walk drift of the offset [m/sqrt(h)].
+    /// Random-walk drift of the offset \[m/sqrt(h)\].
     #[serde(default = "default_drift")]
     pub bias_drift_m_per_sqrth: f64,
-    /// Temperature-like slow error: amplitude [m] and period [s].
+    /// Temperature-like slow error: amplitude \[m\] and period \[s\].
     #[serde(default = "default_slow_amplitude")]
     pub slow_amplitude_m: f64,
     #[serde(default = "default_slow_period")]
     pub slow_period_s: f64,
-    /// Reference (sea-level) pressure of the written pressures [Pa].
+    /// Reference (sea-level) pressure of the written pressures \[Pa\].
     #[serde(default = "default_p_ref")]
     pub reference_pressure_pa: f64,
-    /// The reading is written this long after its time of validity [s].
+    /// The reading is written this long after its time of validity \[s\].
     #[serde(default)]
     pub delay_s: f64,
 }
@@ -66,10 +66,10 @@ pub struct BaroSpec {
 /// One simulated reading.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BaroReading {
-    /// Time tag [s] (time of validity + delay).
+    /// Time tag \[s\] (time of validity + delay).
     pub t_tag: f64,
     pub pressure_pa: f64,
-    /// The error without the white noise: b0 + w(t) + slow(t) [m] (what a filter's
+    /// The error without the white noise: b0 + w(t) + slow(t) \[m\] (what a filter's
     /// bias state should find).
     pub bias_m: f64,
 }
@@ -95,7 +95,7 @@ impl BaroSim {
         }
     }
 
-    /// The reading valid at `t` [s] for a sensor at true height `h_m`.
+    /// The reading valid at `t` \[s\] for a sensor at true height `h_m`.
     pub fn sample(&mut self, t: f64, h_m: f64) -> BaroReading {
         let s = &self.spec;
         let walk = self.walk.step(t - self.t_prev, &mut self.rng);

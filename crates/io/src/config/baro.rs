@@ -1,4 +1,4 @@
-//! `[baro]`: barometric altitude aiding (core aiding::baro::BaroOptions,
+//! `\[baro\]`: barometric altitude aiding (core aiding::baro::BaroOptions,
 //! baro::BaroSource).
 
 use std::path::Path;
@@ -26,7 +26,7 @@ pub(super) struct TBaro {
     pub(super) delay_s: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) std_m: Option<f64>,
-    /// Random walk of the bias [m/sqrt(h)] (the conversion of `VRW`: / 60).
+    /// Random walk of the bias \[m/sqrt(h)\] (the conversion of `VRW`: / 60).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) bias_drift_m_per_sqrth: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]

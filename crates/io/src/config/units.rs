@@ -106,7 +106,7 @@ pub const HOURS: Unit = Unit {
     to_si: |x| x * 3600.0,
     from_si: |x| x / 3600.0,
 };
-/// Random walk in ppm/sqrt(h) -> PSD [1/s]: after T hours the std is q sqrt(T) ppm.
+/// Random walk in ppm/sqrt(h) -> PSD \[1/s\]: after T hours the std is q sqrt(T) ppm.
 pub const PPM_SQRTH_PSD: Unit = Unit {
     to_si: |q| (q * 1e-6).powi(2) / 3600.0,
     from_si: |psd| (psd * 3600.0).sqrt() * 1e6,
