@@ -8,12 +8,9 @@
 //!     cargo run --release -p navfuse-app --example custom_source
 
 use nalgebra::{DMatrix, DVector};
-use navfuse_app::{config, run, MemorySink, RunOptions};
-use navfuse_core::aiding::Linearized;
-use navfuse_core::config::NavConfig;
+use navfuse_app::prelude::*;
 use navfuse_core::earth::lla_diff_ned;
 use navfuse_core::state::POS;
-use navfuse_core::{AidingSource, Fuser, SourceFactory};
 use navfuse_io::nav::read_nav;
 use navfuse_sim::{generate::generate, scenario::Scenario};
 use std::path::Path;
@@ -70,7 +67,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     generate(&scenario, &dir)?;
     let truth = read_nav(&dir.join("truth.nav"))?;
     for extra in [None, Some(known_height as SourceFactory)] {
-        let cfg = config::load(&dir.join("run.toml"))?;
+        let cfg = load_config(&dir.join("run.toml"))?;
         let mut sink = MemorySink::new();
         let opts = RunOptions {
             extra_sources: extra,

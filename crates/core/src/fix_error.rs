@@ -36,22 +36,6 @@ pub fn igg3_factor(t: f64, k0: f64, k1: f64) -> f64 {
     }
 }
 
-/// The Gauss-Markov fix error: nominal estimate and current steady-state sigma.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct FixBias {
-    /// Estimated correlated error of the fixes, NED \[m\].
-    pub bias_ned_m: Vector3<f64>,
-    /// Steady-state 1-sigma per axis of the process, from the latest fix \[m\].
-    pub sigma_ned_m: Vector3<f64>,
-}
-
-impl FixBias {
-    /// The nominal estimate decays as the process does over `dt`.
-    pub fn propagate(&mut self, dt: f64, corr_time_s: f64) {
-        self.bias_ned_m *= (-dt / corr_time_s).exp();
-    }
-}
-
 /// Robust scale of the innovations: the median of NIS / dof over the last `window`
 /// tested measurements against the median of chi-square(dof) / dof, at least 1. The
 /// gate and the down-weighting test NIS / scale, so they judge a fix against the

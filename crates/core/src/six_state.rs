@@ -254,19 +254,16 @@ impl SixState {
         f.std()
     }
 
+    #[cfg(test)]
     /// IMU-centre position: latitude \[rad\], longitude \[rad\], height \[m\].
     pub fn lla(&self) -> Vector3<f64> {
         self.lla
     }
 
+    #[cfg(test)]
     /// NED velocity \[m/s\].
     pub fn v_ned_mps(&self) -> Vector3<f64> {
         self.v_ned_mps
-    }
-
-    /// Covariance of (r NED \[m\], v NED \[m/s\]).
-    pub fn covariance(&self) -> &Matrix6<f64> {
-        &self.p
     }
 
     /// 1-sigma of (r_N, r_E, r_D \[m\], v_N, v_E, v_D \[m/s\]).
