@@ -225,7 +225,7 @@ pub(crate) fn navigate(
             .count();
         if rej > 0 {
             eprintln!(
-                "navfuse: {rej} GNSS/heading measurements rejected by the innovation gate (see events.log)"
+                "navfuse: {rej} measurements rejected by the innovation gate (see events.log)"
             );
         }
     }

@@ -93,6 +93,20 @@ pub fn read_baro(
             }
             let v = num(1, "value")?;
             let height_m = match src.quantity {
+                // -1 km .. 30 km: a pressure column read as heights is far outside.
+                BaroQuantity::HeightM if !(-1000.0..=30_000.0).contains(&v) => {
+                    let hint = if (10_000.0..=120_000.0).contains(&v) {
+                        " (a pressure in Pa? set quantity = \"pressure_pa\")"
+                    } else {
+                        ""
+                    };
+                    return Err(InputError::at_field(
+                        path,
+                        ln,
+                        "value",
+                        format!("expected a pressure altitude between -1000 and 30000 m, found {v} m{hint}"),
+                    ));
+                }
                 BaroQuantity::HeightM => v,
                 BaroQuantity::PressurePa | BaroQuantity::PressureHpa => {
                     let p = if src.quantity == BaroQuantity::PressureHpa {
@@ -102,10 +116,10 @@ pub fn read_baro(
                     };
                     // 10 kPa .. 120 kPa: from above 15 km to below the Dead Sea.
                     if !(10_000.0..=120_000.0).contains(&p) {
-                        let hint = if (100.0..=1200.0).contains(&p) {
-                            " (a pressure in hPa? set quantity = \"pressure_hpa\")"
-                        } else if (10.0..=120.0).contains(&p) {
+                        let hint = if (10.0..=120.0).contains(&p) {
                             " (a pressure in kPa? give Pa or hPa)"
+                        } else if (100.0..=1200.0).contains(&p) {
+                            " (a pressure in hPa? set quantity = \"pressure_hpa\")"
                         } else {
                             ""
                         };

@@ -292,11 +292,11 @@ pub fn read_aiding_inputs(
     use navfuse_core::Measurement;
     let mut out = Vec::new();
     if let Some(src) = cfg.baro.as_ref().filter(|_| cfg.nav.baro.enabled) {
-        out.extend(
-            crate::baro::read_baro(src, warnings)?
-                .into_iter()
-                .map(Measurement::Baro),
-        );
+        let b = crate::baro::read_baro(src, warnings)?;
+        if b.is_empty() {
+            warnings.push(format!("{}: no barometer records", src.path.display()));
+        }
+        out.extend(b.into_iter().map(Measurement::Baro));
     }
     Ok(out)
 }

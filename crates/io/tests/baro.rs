@@ -92,6 +92,21 @@ fn bad_records_name_file_line_and_field() {
     .unwrap_err()
     .to_string();
     assert!(e.contains("back.txt:2"), "{e}");
+    // kPa, and a pressure file read as heights.
+    let e = read_baro(
+        &src(tmp("kpa.txt", "1 101.3\n"), BaroQuantity::PressurePa, 0.0),
+        &mut w,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("kPa"), "{e}");
+    let e = read_baro(
+        &src(tmp("ph.txt", "1 101300\n"), BaroQuantity::HeightM, 0.0),
+        &mut w,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("ph.txt:1") && e.contains("pressure_pa"), "{e}");
     // A last line cut mid-write is dropped with a warning.
     let out = read_baro(
         &src(

@@ -139,6 +139,13 @@ impl AidingSource for Barometer {
         }]
     }
 
+    /// A bias never set (no reading) is no estimate: left out of the summary.
+    fn finish(&self, _f: &Fuser, summary: &mut crate::events::RunSummary) {
+        if !self.bias_set {
+            summary.source_states.retain(|s| s.name != "baro_bias");
+        }
+    }
+
     fn on_measurement(&mut self, m: &Measurement, f: &mut Fuser) -> Handled {
         let Measurement::Baro(z) = m else {
             return Handled::No;
