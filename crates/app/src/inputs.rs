@@ -14,7 +14,7 @@ use navfuse_io::input::{Coupling, GnssFormat, GnssSource};
 use navfuse_io::odometer::read_odometer_report;
 
 /// Seconds in a GPS week.
-pub(crate) const WEEK_S: f64 = 604_800.0;
+pub(crate) use navfuse_core::time::{split_week, SECONDS_PER_WEEK as WEEK_S};
 
 /// A run's inputs, read; GNSS and heading times on the IMU's week.
 pub(crate) struct Inputs {
@@ -32,6 +32,8 @@ pub(crate) struct Inputs {
     pub gnss_skipped: usize,
     pub odometer: Vec<OdometerSample>,
     pub heading: Vec<HeadingObs>,
+    /// The other aiding inputs (IMU time scale), as measurements.
+    pub other: Vec<navfuse_core::Measurement>,
 }
 
 /// Open the IMU and read the other inputs `cfg` names; input notes go to `job.notes`,
@@ -99,6 +101,7 @@ pub(crate) fn read(cfg: &RunConfig, job: &mut JobResult, warn: bool) -> Result<I
         }
         _ => Vec::new(),
     };
+    let other = navfuse_io::input::read_aiding_inputs(cfg, &mut reader_warnings)?;
     check(
         job,
         warn,
@@ -128,14 +131,6 @@ pub(crate) fn read(cfg: &RunConfig, job: &mut JobResult, warn: bool) -> Result<I
         gnss_skipped,
         odometer,
         heading,
+        other,
     })
-}
-
-/// Normalise (week, t) so that t is in [0, 604800).
-pub(crate) fn split_week(week: u32, t: f64) -> (u32, f64) {
-    if (0.0..WEEK_S).contains(&t) {
-        return (week, t);
-    }
-    let k = (t / WEEK_S).floor();
-    ((week as i64 + k as i64).max(0) as u32, t - k * WEEK_S)
 }

@@ -26,6 +26,9 @@ pub struct RunOptions {
     /// then ends with [`Error::Interrupted`], its sink holding every epoch up to the
     /// one named there.
     pub stop: Option<StopFlag>,
+    /// Aiding sources of your own, after the registry's (`navfuse_core::SourceFactory`;
+    /// `examples/custom_source.rs`).
+    pub extra_sources: Option<navfuse_core::SourceFactory>,
 }
 
 impl RunOptions {
@@ -101,6 +104,7 @@ pub fn run_job_opts(
         progress,
         warn,
         stop: None,
+        extra_sources: None,
     };
     run(cfg, &mut sink, &opts)
 }

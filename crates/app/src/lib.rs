@@ -41,3 +41,12 @@ pub use sink::{MemorySink, OutputLayout, SolutionSink};
 pub use stop::{Interrupted, StopFlag};
 pub use summary::JobResult;
 pub use time_offset::TimeOffsetFit;
+
+/// What a program that runs navfuse usually needs, in one `use`:
+/// `use navfuse_app::prelude::*;`.
+pub mod prelude {
+    pub use crate::{run, Error, FileSink, JobResult, MemorySink, RunOptions, SolutionSink};
+    pub use navfuse_core::prelude::*;
+    pub use navfuse_io::config::{load as load_config, RunConfig};
+    pub use navfuse_io::nav::SolutionRecord;
+}

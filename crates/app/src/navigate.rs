@@ -33,6 +33,7 @@ pub(crate) fn navigate(
         gnss_skipped,
         odometer,
         heading,
+        other,
     } = inputs::read(&cfg, job, warn)?;
     // GNSS epoch times (fixes, or raw epochs with tight coupling).
     let gnss_times: Vec<f64> = fixes
@@ -58,9 +59,12 @@ pub(crate) fn navigate(
     // Configuration and input checks before the run.
     let found = checks::before_run(&cfg, gnss_epochs, gnss_skipped, last_gnss_t);
     check(job, warn, found)?;
-    let measurements = navfuse_core::merge_raw_epochs(
-        navfuse_core::merge_measurements(&fixes, &odometer, &heading),
-        raw,
+    let measurements = navfuse_core::merge_more(
+        navfuse_core::merge_raw_epochs(
+            navfuse_core::merge_measurements(&fixes, &odometer, &heading),
+            raw,
+        ),
+        other,
     );
 
     let first = match reader.next() {
@@ -126,8 +130,11 @@ pub(crate) fn navigate(
     let started = std::cell::Cell::new(false);
     let mut stopped: Option<RunSummary> = None;
     let mut last_out_t = None;
-    let result = navfuse_core::run(
+    let result = navfuse_core::run_with_sources(
         &cfg.nav,
+        |c: &navfuse_core::config::NavConfig, t0| {
+            opts.extra_sources.map_or_else(Vec::new, |f| f(c, t0))
+        },
         std::iter::once(Ok(first)).chain(reader.by_ref().map(|r| {
             let r = r.map_err(Error::from);
             if started.get() {
@@ -218,7 +225,7 @@ pub(crate) fn navigate(
             .count();
         if rej > 0 {
             eprintln!(
-                "navfuse: {rej} GNSS/heading measurements rejected by the innovation gate (see events.log)"
+                "navfuse: {rej} measurements rejected by the innovation gate (see events.log)"
             );
         }
     }

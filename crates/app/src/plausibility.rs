@@ -120,7 +120,7 @@ pub fn time_overlap(imu: &Span, gnss: &Span) -> Vec<Finding> {
     vec![Finding::error(msg)]
 }
 
-const WEEK_S: f64 = 604_800.0;
+use navfuse_core::time::SECONDS_PER_WEEK as WEEK_S;
 
 /// A GNSS input was configured but gave no epoch.
 pub fn gnss_not_empty(file: &str, epochs: usize, skipped: usize) -> Vec<Finding> {

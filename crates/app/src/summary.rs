@@ -62,7 +62,7 @@ impl JobResult {
                 .map(|f| f.message.clone())
                 .collect::<Vec<_>>()
         };
-        serde_json::json!({
+        let mut v = serde_json::json!({
             "status": self.status,
             "error": self.error,
             "warnings": with(plausibility::Severity::Warning),
@@ -106,7 +106,20 @@ impl JobResult {
             })),
             "events": s.events.iter().map(|e| e.to_string()).collect::<Vec<_>>(),
             "files": self.files.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
-        })
+        });
+        if !s.source_states.is_empty() {
+            // The sources' own states (e.g. the barometer bias), final value and 1-sigma.
+            v["source_states"] = s
+                .source_states
+                .iter()
+                .map(|st| {
+                    let e = serde_json::json!({"value": st.value, "sd": st.std});
+                    (st.name.to_string(), e)
+                })
+                .collect::<serde_json::Map<_, _>>()
+                .into();
+        }
+        v
     }
 
     pub fn summary_line(&self) -> String {
@@ -148,7 +161,9 @@ impl JobResult {
             ));
         }
         let names: Vec<String> = self.files.iter().map(|p| p.display().to_string()).collect();
-        line.push_str(&format!("; wrote {}", names.join(", ")));
+        if !names.is_empty() {
+            line.push_str(&format!("; wrote {}", names.join(", ")));
+        }
         line
     }
 }

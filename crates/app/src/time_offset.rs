@@ -84,8 +84,11 @@ fn pass(
     let mut nav = cfg.nav.clone();
     nav.filter.time_offset = Some(to);
     let reader = open_imu(&cfg.imu)?;
-    let s1 = navfuse_core::run(
+    let s1 = navfuse_core::run_with_sources(
         &nav,
+        |c: &navfuse_core::config::NavConfig, t0| {
+            opts.extra_sources.map_or_else(Vec::new, |f| f(c, t0))
+        },
         reader.map(|r| opts.stop_check(r.map_err(Error::from))),
         measurements,
         Some(f64::INFINITY),

@@ -42,6 +42,7 @@ pub fn main(
         progress: !quiet,
         warn: true,
         stop: Some(stop),
+        ..Default::default()
     };
     let job = navfuse_app::run(cfg, &mut FileSink::create(&out_dir)?, &opts)?;
     if !quiet {

@@ -178,6 +178,17 @@ pub struct RunSummary {
     pub receiver_clock: Option<(f64, f64)>,
     /// The uniform status of each aiding source at the end, in registry order.
     pub aid_status: Vec<AidStatus>,
+    /// Final estimates of the blocks the sources define in their own files
+    /// (`Block::Source`): name, values and 1-sigma per state.
+    pub source_states: Vec<SourceState>,
+}
+
+/// The final estimate of a source's own block.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SourceState {
+    pub name: &'static str,
+    pub value: Vec<f64>,
+    pub std: Vec<f64>,
 }
 
 /// The uniform status of one aiding source, kept by the [`crate::aiding::source::Fuser`]

@@ -6,6 +6,8 @@
 
 use nalgebra::{DMatrix, DVector};
 
+/// The chi-square gate threshold moved to [`crate::chi2`]; re-exported for the engine.
+
 /// Result of one measurement update.
 #[derive(Clone, Debug)]
 pub enum UpdateOutcome {
@@ -173,162 +175,9 @@ fn matmul(dst: &mut DMatrix<f64>, lhs: &DMatrix<f64>, rhs: &DMatrix<f64>, rhs_t:
     fm(d, acc, l, r, 1.0, Par::Seq);
 }
 
-/// Upper-tail chi-square quantile: the value x with P(X > x) = `p` for `dof` degrees
-/// of freedom (Wilson-Hilferty approximation refined by Newton steps on the exact
-/// CDF for dof <= 6; accurate to better than 0.1 % for p in [1e-9, 0.5]).
-pub fn chi2_threshold(dof: usize, p: f64) -> f64 {
-    let p = p.clamp(1e-300, 0.5);
-    let k = dof as f64;
-    let z = normal_upper_quantile(p);
-    let a = 2.0 / (9.0 * k);
-    let mut x = k * (1.0 - a + z * a.sqrt()).powi(3);
-    if dof <= 6 {
-        // Newton on ln(tail): d ln(tail)/dx = -pdf / tail; nearly linear in the
-        // tail, so it converges from the Wilson-Hilferty start; steps are bounded.
-        for _ in 0..50 {
-            let tail = chi2_upper_tail(dof, x);
-            let pdf = chi2_pdf(dof, x);
-            if !(tail > 0.0 && pdf > 0.0) {
-                break;
-            }
-            let step = ((tail.ln() - p.ln()) * tail / pdf).clamp(-0.5 * x, x);
-            x += step;
-            if step.abs() < 1e-12 * x {
-                break;
-            }
-        }
-    }
-    x
-}
-
-fn chi2_pdf(dof: usize, x: f64) -> f64 {
-    let k = dof as f64 / 2.0;
-    ((k - 1.0) * x.ln() - x / 2.0 - k * 2f64.ln() - ln_gamma_half(dof)).exp()
-}
-
-/// ln Gamma(dof / 2) for small integer dof.
-fn ln_gamma_half(dof: usize) -> f64 {
-    let mut g: f64 = if dof % 2 == 0 {
-        1.0
-    } else {
-        std::f64::consts::PI.sqrt()
-    };
-    let mut a = if dof % 2 == 0 { 1.0 } else { 0.5 };
-    while a < dof as f64 / 2.0 {
-        g *= a;
-        a += 1.0;
-    }
-    g.ln()
-}
-
-/// Exact upper tail of chi-square for integer dof (closed forms).
-fn chi2_upper_tail(dof: usize, x: f64) -> f64 {
-    let h = x / 2.0;
-    if dof % 2 == 0 {
-        let mut term = 1.0;
-        let mut sum = 1.0;
-        for i in 1..dof / 2 {
-            term *= h / i as f64;
-            sum += term;
-        }
-        (-h).exp() * sum
-    } else {
-        let mut tail = erfc((h).sqrt());
-        let mut term = (h.sqrt() * 2.0 / std::f64::consts::PI.sqrt()) * (-h).exp();
-        let mut a = 0.5;
-        while a + 1.0 <= dof as f64 / 2.0 {
-            tail += term;
-            a += 1.0;
-            term *= h / a;
-        }
-        tail
-    }
-}
-
-fn erfc(x: f64) -> f64 {
-    // Numerical Recipes erfc (Chebyshev), relative error < 1.2e-7.
-    let z = x.abs();
-    let t = 1.0 / (1.0 + 0.5 * z);
-    let r = t
-        * (-z * z - 1.265_512_23
-            + t * (1.000_023_68
-                + t * (0.374_091_96
-                    + t * (0.096_784_18
-                        + t * (-0.186_288_06
-                            + t * (0.278_868_07
-                                + t * (-1.135_203_98
-                                    + t * (1.488_515_87
-                                        + t * (-0.822_152_23 + t * 0.170_872_77)))))))))
-            .exp();
-    if x >= 0.0 {
-        r
-    } else {
-        2.0 - r
-    }
-}
-
-/// Upper-tail standard normal quantile: z with P(Z > z) = p, for p in (0, 0.5],
-/// as minus the lower quantile of p (Acklam's rational approximation), which keeps
-/// full accuracy for tiny p.
-fn normal_upper_quantile(p: f64) -> f64 {
-    const A: [f64; 6] = [
-        -3.969683028665376e1,
-        2.209460984245205e2,
-        -2.759285104469687e2,
-        1.383577518672690e2,
-        -3.066479806614716e1,
-        2.506628277459239,
-    ];
-    const B: [f64; 5] = [
-        -5.447609879822406e1,
-        1.615858368580409e2,
-        -1.556989798598866e2,
-        6.680131188771972e1,
-        -1.328068155288572e1,
-    ];
-    const C: [f64; 6] = [
-        -7.784894002430293e-3,
-        -3.223964580411365e-1,
-        -2.400758277161838,
-        -2.549732539343734,
-        4.374664141464968,
-        2.938163982698783,
-    ];
-    const D: [f64; 4] = [
-        7.784695709041462e-3,
-        3.224671290700398e-1,
-        2.445134137142996,
-        3.754408661907416,
-    ];
-    let p = p.clamp(1e-300, 0.5);
-    let lower = if p < 0.02425 {
-        let r = (-2.0 * p.ln()).sqrt();
-        (((((C[0] * r + C[1]) * r + C[2]) * r + C[3]) * r + C[4]) * r + C[5])
-            / ((((D[0] * r + D[1]) * r + D[2]) * r + D[3]) * r + 1.0)
-    } else {
-        let r = p - 0.5;
-        let s = r * r;
-        (((((A[0] * s + A[1]) * s + A[2]) * s + A[3]) * s + A[4]) * s + A[5]) * r
-            / (((((B[0] * s + B[1]) * s + B[2]) * s + B[3]) * s + B[4]) * s + 1.0)
-    };
-    -lower
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn chi2_quantiles() {
-        // Table values: chi2(3) upper 1e-4 = 21.108, chi2(3) upper 0.05 = 7.815, chi2(1) 0.01 = 6.635.
-        assert!((chi2_threshold(3, 1e-4) - 21.108).abs() < 0.01);
-        assert!((chi2_threshold(3, 0.05) - 7.815).abs() < 0.005);
-        assert!((chi2_threshold(1, 0.01) - 6.635).abs() < 0.005);
-        assert!((chi2_threshold(6, 1e-3) - 22.458).abs() < 0.01);
-        // Tiny probabilities stay finite and large (no silent switch-off).
-        let t = chi2_threshold(3, 1e-20);
-        assert!(t.is_finite() && t > 70.0 && t < 200.0, "{t}");
-    }
 
     #[test]
     fn scalar_update_matches_closed_form() {

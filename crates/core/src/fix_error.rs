@@ -21,7 +21,7 @@
 //!   each other (consecutive innovations change by less than their 3-sigma) for
 //!   `readmit_s`, so a short burst of bad fixes, however consistent, stays out.
 
-use crate::filter::chi2_threshold;
+use crate::chi2::chi2_threshold;
 use nalgebra::Vector3;
 use std::collections::VecDeque;
 
@@ -33,22 +33,6 @@ pub fn igg3_factor(t: f64, k0: f64, k1: f64) -> f64 {
         k0 / t * ((k1 - t) / (k1 - k0)).powi(2)
     } else {
         0.0
-    }
-}
-
-/// The Gauss-Markov fix error: nominal estimate and current steady-state sigma.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct FixBias {
-    /// Estimated correlated error of the fixes, NED \[m\].
-    pub bias_ned_m: Vector3<f64>,
-    /// Steady-state 1-sigma per axis of the process, from the latest fix \[m\].
-    pub sigma_ned_m: Vector3<f64>,
-}
-
-impl FixBias {
-    /// The nominal estimate decays as the process does over `dt`.
-    pub fn propagate(&mut self, dt: f64, corr_time_s: f64) {
-        self.bias_ned_m *= (-dt / corr_time_s).exp();
     }
 }
 

@@ -19,12 +19,14 @@
 //! again) -> trusted after `readmit_s` of continuous agreement. No file I/O here: the
 //! engine feeds [`EpochCheck`]s and logs the [`Transition`]s.
 
-use crate::filter::chi2_threshold;
+use crate::chi2::chi2_threshold;
 use nalgebra::Vector3;
 use std::collections::VecDeque;
 
-/// What the GNSS is tested against.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// What the GNSS is tested against. In the TOML `spoofing.reference`: "prediction",
+/// "dead_reckoning".
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum IntegrityReference {
     /// The navigator's prediction at the epoch (GNSS-aided until the attack).
     Prediction,

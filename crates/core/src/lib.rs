@@ -9,31 +9,46 @@
 //! holds what a run reports; `eval` scores solutions.
 
 pub mod aiding;
-pub mod alignment;
+pub(crate) mod alignment;
 pub mod attitude;
+pub mod chi2;
 pub mod config;
 pub mod earth;
-pub mod error_model;
+pub(crate) mod error_model;
 pub mod eval;
 pub mod events;
-pub mod filter;
-pub mod fix_error;
+pub(crate) mod filter;
+pub(crate) mod fix_error;
 pub mod integrity;
-pub mod mechanization;
+pub(crate) mod mechanization;
 pub mod nav;
 pub mod outage;
-pub mod six_state;
+pub(crate) mod six_state;
 pub mod state;
-pub mod static_detect;
+pub(crate) mod static_detect;
+pub mod time;
 pub mod types;
 
 pub use aiding::source::{AidingSource, Fuser, Handled};
 pub use events::{AidStatus, Event, RunSummary};
 pub use nav::ins_filter::{BlockProcess, BlockSpec, Fused};
 pub use nav::navigator::{NavError, Navigator};
-pub use nav::run::run;
+pub use nav::run::{run, run_with_sources, SourceFactory};
 pub use nav::timeline;
 pub use types::{
-    merge_measurements, merge_raw_epochs, GnssFix, GnssRawEpoch, HeadingObs, ImuErrors, ImuSample,
-    Measurement, NavState, OdometerSample, SatMeasurement,
+    merge_measurements, merge_more, merge_raw_epochs, GnssFix, GnssRawEpoch, HeadingObs, ImuErrors,
+    ImuSample, Measurement, NavState, OdometerSample, SatMeasurement,
 };
+
+/// The core's common items in one `use`: `use navfuse_core::prelude::*;`.
+pub mod prelude {
+    pub use crate::aiding::source::{AidingSource, Fuser, Handled, Shared};
+    pub use crate::aiding::{Aiding, Linearized};
+    pub use crate::config::NavConfig;
+    pub use crate::events::{AidStatus, Event, RunSummary};
+    pub use crate::nav::ins_filter::{BlockProcess, BlockSpec, Fused};
+    pub use crate::nav::navigator::{NavError, Navigator};
+    pub use crate::nav::run::{run, run_with_sources, SourceFactory};
+    pub use crate::state::{Block, StateLayout};
+    pub use crate::types::{GnssFix, ImuErrors, ImuSample, Measurement, NavState};
+}

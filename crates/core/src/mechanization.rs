@@ -66,13 +66,6 @@ impl Mechanizer {
         Self::default()
     }
 
-    /// Forget history (after a gap or a state reset).
-    pub fn reset(&mut self) {
-        self.prev_imu = None;
-        self.prev_nav = None;
-        self.earth = None;
-    }
-
     /// Advance `nav` over one compensated IMU interval ending at `imu.t`.
     pub fn step(&mut self, nav: &NavState, imu: &ImuSample) -> (NavState, StepInfo) {
         let dt = imu.dt;

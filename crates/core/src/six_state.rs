@@ -254,19 +254,16 @@ impl SixState {
         f.std()
     }
 
+    #[cfg(test)]
     /// IMU-centre position: latitude \[rad\], longitude \[rad\], height \[m\].
     pub fn lla(&self) -> Vector3<f64> {
         self.lla
     }
 
+    #[cfg(test)]
     /// NED velocity \[m/s\].
     pub fn v_ned_mps(&self) -> Vector3<f64> {
         self.v_ned_mps
-    }
-
-    /// Covariance of (r NED \[m\], v NED \[m/s\]).
-    pub fn covariance(&self) -> &Matrix6<f64> {
-        &self.p
     }
 
     /// 1-sigma of (r_N, r_E, r_D \[m\], v_N, v_E, v_D \[m/s\]).
@@ -695,7 +692,7 @@ mod tests {
         let (y, s) = f.innovation(&fx).unwrap();
         assert!((y - DVector::from_column_slice(&[0.0, 100.0, 0.0])).norm() < 1e-6);
         assert!((s[(1, 1)] - (1.0 + 2.25)).abs() < 1e-12);
-        let gate = crate::filter::chi2_threshold(3, 1e-4);
+        let gate = crate::chi2::chi2_threshold(3, 1e-4);
         match f.update(&fx, Some(gate)) {
             SixStateOutcome::Rejected { nis, threshold } => {
                 assert!((nis - 100.0f64.powi(2) / 3.25).abs() < 1e-6 && threshold == gate)

@@ -157,6 +157,8 @@ pub enum Measurement {
     GnssRaw(Arc<GnssRawEpoch>),
     Odometer(OdometerSample),
     Heading(HeadingObs),
+    /// Barometric pressure altitude (aiding/baro.rs), IMU time scale.
+    Baro(crate::aiding::baro::BaroSample),
 }
 
 impl Measurement {
@@ -168,13 +170,14 @@ impl Measurement {
             Measurement::GnssRaw(e) => e.t,
             Measurement::Odometer(o) => o.t - 0.5 * o.interval_s,
             Measurement::Heading(h) => h.t,
+            Measurement::Baro(b) => b.t,
         }
     }
 
     /// True for inputs time-tagged by the GNSS receiver (shifted by the GNSS-IMU time
     /// offset when it is estimated); the odometer shares the IMU clock.
     pub fn on_gnss_clock(&self) -> bool {
-        !matches!(self, Measurement::Odometer(_))
+        !matches!(self, Measurement::Odometer(_) | Measurement::Baro(_))
     }
 }
 
@@ -189,6 +192,17 @@ pub fn merge_measurements(
     all.extend(gnss.iter().map(|f| Measurement::Gnss(*f)));
     all.extend(odometer.iter().map(|o| Measurement::Odometer(*o)));
     all.extend(heading.iter().map(|h| Measurement::Heading(*h)));
+    all.sort_by(|a, b| a.t().total_cmp(&b.t()));
+    all
+}
+
+/// Add more inputs to a merged list, keeping it time-sorted (stable: at equal times
+/// the new ones come after what was there).
+pub fn merge_more(mut all: Vec<Measurement>, more: Vec<Measurement>) -> Vec<Measurement> {
+    if more.is_empty() {
+        return all;
+    }
+    all.extend(more);
     all.sort_by(|a, b| a.t().total_cmp(&b.t()));
     all
 }

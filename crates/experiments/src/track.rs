@@ -5,13 +5,11 @@ use anyhow::Result;
 use navfuse_app::SolutionRecord;
 use navfuse_core::attitude::euler_from_q_bn;
 use navfuse_core::eval::TrajPoint;
+use navfuse_core::time::SECONDS_PER_WEEK;
 use navfuse_core::NavState;
 use navfuse_io::nav::read_nav;
 use navfuse_io::nav_written::nav_as_written;
 use std::path::Path;
-
-/// Seconds in a GPS week.
-pub const WEEK_S: f64 = 604_800.0;
 
 /// A trajectory with its GPS week (0 = unknown, times are seconds of week).
 pub struct Track {
@@ -26,7 +24,7 @@ impl Track {
         let week = rows.peek().map_or(0, |r| r.0);
         let points = rows
             .map(|(w, s)| TrajPoint {
-                t: s.t + (w as f64 - week as f64) * WEEK_S,
+                t: s.t + (w as f64 - week as f64) * SECONDS_PER_WEEK,
                 lla: s.lla,
                 v_n: Some(s.v_n),
                 rpy: Some(euler_from_q_bn(&s.q_bn)),

@@ -9,7 +9,7 @@
 
 use crate::ephemeris::{GPS_PI, SPEED_OF_LIGHT_MPS};
 
-/// Klobuchar L1 ionospheric delay [m] (IS-GPS-200 20.3.3.5.2.5).
+/// Klobuchar L1 ionospheric delay \[m\] (IS-GPS-200 20.3.3.5.2.5).
 ///
 /// `alpha` [s, s/sc, s/sc^2, s/sc^3] and `beta` [s, s/sc, s/sc^2, s/sc^3] as broadcast
 /// (RINEX `ION ALPHA`/`ION BETA`); receiver latitude/longitude, satellite azimuth and
@@ -52,7 +52,7 @@ pub fn klobuchar_l1_delay_m(
 /// Standard-atmosphere relative humidity used by default (RTKLIB `tropmodel`).
 pub const STD_REL_HUMIDITY: f64 = 0.7;
 
-/// Saastamoinen zenith delays (hydrostatic, wet) [m] with a standard atmosphere at
+/// Saastamoinen zenith delays (hydrostatic, wet) \[m\] with a standard atmosphere at
 /// ellipsoidal height `h_m` (clamped at 0) and latitude `lat_rad`; `rel_humidity` in
 /// [0, 1]. Returns (0, 0) outside -100 m..10 km, where the model is not meant to work.
 pub fn saastamoinen_zenith_m(lat_rad: f64, h_m: f64, rel_humidity: f64) -> (f64, f64) {
@@ -76,7 +76,7 @@ pub fn tropo_mapping(el_rad: f64) -> f64 {
     1.0 / el_rad.max(3f64.to_radians()).sin()
 }
 
-/// Slant tropospheric delay [m]: Saastamoinen zenith delays (humidity 0.7) times
+/// Slant tropospheric delay \[m\]: Saastamoinen zenith delays (humidity 0.7) times
 /// [`tropo_mapping`]; 0 for el <= 0.
 pub fn saastamoinen_slant_m(lat_rad: f64, h_m: f64, el_rad: f64) -> f64 {
     if el_rad <= 0.0 {

@@ -35,11 +35,11 @@ const SLOTS_DEG: [(f64, f64); 24] = [
 ];
 
 /// Nominal sqrt(A) of a GPS orbit [sqrt(m)] (A = 26 559.7 km).
-pub const NOMINAL_SQRT_A: f64 = 5_153.6;
-/// Nominal inclination [deg].
-pub const NOMINAL_INCLINATION_DEG: f64 = 55.0;
+pub(crate) const NOMINAL_SQRT_A: f64 = 5_153.6;
+/// Nominal inclination \[deg\].
+pub(crate) const NOMINAL_INCLINATION_DEG: f64 = 55.0;
 /// Nominal node rate of the SPS PS almanac tables, -4.4874e-7 deg/s [rad/s].
-pub const NOMINAL_OMEGA_DOT_RAD_PER_S: f64 = -4.4874e-7 * std::f64::consts::PI / 180.0;
+pub(crate) const NOMINAL_OMEGA_DOT_RAD_PER_S: f64 = -4.4874e-7 * std::f64::consts::PI / 180.0;
 
 /// The baseline 24-slot constellation as circular ephemerides at `toe`, PRN 1-24 in
 /// slot order A1..F4; clocks zero, healthy, 4 h fit interval.

@@ -22,10 +22,10 @@ use navfuse_core::earth::ecef_to_lla;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DgpsCorrection {
     /// Time the correction refers to: GPS seconds of week, continuing past 604800
-    /// after a week rollover (one continuous scale per store) [s].
+    /// after a week rollover (one continuous scale per store) \[s\].
     pub t_s: f64,
     pub prn: u8,
-    /// Pseudorange correction, added to the measured pseudorange [m].
+    /// Pseudorange correction, added to the measured pseudorange \[m\].
     pub prc_m: f64,
     /// Its rate [m/s].
     pub rrc_mps: f64,
@@ -34,7 +34,7 @@ pub struct DgpsCorrection {
 }
 
 impl DgpsCorrection {
-    /// The correction at time `t_s` (same scale as `self.t_s`): prc + rrc (t - t_s) [m].
+    /// The correction at time `t_s` (same scale as `self.t_s`): prc + rrc (t - t_s) \[m\].
     pub fn at_m(&self, t_s: f64) -> f64 {
         self.prc_m + self.rrc_mps * (t_s - self.t_s)
     }
@@ -81,7 +81,7 @@ impl DgpsCorrections {
         }
     }
 
-    /// The same with the reference station position (ECEF [m]; ignored unless
+    /// The same with the reference station position (ECEF \[m\]; ignored unless
     /// finite). With it the rover also removes the difference of the broadcast
     /// atmosphere models between itself and the station (the station's model delays
     /// are inside prc): metres for a UAV kilometres above the station.
@@ -93,7 +93,7 @@ impl DgpsCorrections {
         self
     }
 
-    /// The reference station position, ECEF [m], if known.
+    /// The reference station position, ECEF \[m\], if known.
     pub fn reference_pos_ecef_m(&self) -> Option<Vector3<f64>> {
         self.reference_pos_ecef_m
     }
@@ -107,7 +107,7 @@ impl DgpsCorrections {
         self.len == 0
     }
 
-    /// Earliest correction time [s], if any.
+    /// Earliest correction time \[s\], if any.
     pub fn first_t_s(&self) -> Option<f64> {
         self.first_t_s
     }
@@ -218,7 +218,7 @@ pub fn corrections_from_reference_station(
     // Smoothed clock: (tag time [s of week], c dt_ref [m], drift [m/s]).
     let mut clock: Option<(f64, f64, f64)> = None;
     for (k, ep) in epochs.iter().enumerate() {
-        let t_tag = f64::from(ep.t.week - week) * 604_800.0 + ep.t.sow;
+        let t_tag = ep.t.seconds_of_week(week);
         let gap = clock.map(|(tp, _, _)| t_tag - tp);
         let continuous_epoch =
             ep.flag == 0 && gap.is_some_and(|dt| dt > 0.0 && dt <= REF_MAX_GAP_S);

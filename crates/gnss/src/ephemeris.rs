@@ -31,7 +31,7 @@ pub struct GpsEphemeris {
     pub prn: u8,
     /// Clock reference time toc (GPST).
     pub toc: GpsTime,
-    /// Clock bias af0 [s].
+    /// Clock bias af0 \[s\].
     pub af0_s: f64,
     /// Clock drift af1 [s/s].
     pub af1_s_per_s: f64,
@@ -39,33 +39,33 @@ pub struct GpsEphemeris {
     pub af2_s_per_s2: f64,
     /// Issue of data, ephemeris.
     pub iode: u16,
-    /// Sine harmonic correction to the orbit radius Crs [m].
+    /// Sine harmonic correction to the orbit radius Crs \[m\].
     pub crs_m: f64,
     /// Mean motion difference Delta n [rad/s].
     pub delta_n_rad_per_s: f64,
-    /// Mean anomaly at toe M0 [rad].
+    /// Mean anomaly at toe M0 \[rad\].
     pub m0_rad: f64,
-    /// Cosine harmonic correction to the argument of latitude Cuc [rad].
+    /// Cosine harmonic correction to the argument of latitude Cuc \[rad\].
     pub cuc_rad: f64,
     /// Eccentricity e [-].
     pub e: f64,
-    /// Sine harmonic correction to the argument of latitude Cus [rad].
+    /// Sine harmonic correction to the argument of latitude Cus \[rad\].
     pub cus_rad: f64,
     /// Square root of the semi-major axis [sqrt(m)].
     pub sqrt_a_sqrt_m: f64,
     /// Ephemeris reference time toe (GPS week of the ephemeris + toe seconds of week).
     pub toe: GpsTime,
-    /// Cosine harmonic correction to inclination Cic [rad].
+    /// Cosine harmonic correction to inclination Cic \[rad\].
     pub cic_rad: f64,
-    /// Longitude of the ascending node at the weekly epoch, Omega0 [rad].
+    /// Longitude of the ascending node at the weekly epoch, Omega0 \[rad\].
     pub omega0_rad: f64,
-    /// Sine harmonic correction to inclination Cis [rad].
+    /// Sine harmonic correction to inclination Cis \[rad\].
     pub cis_rad: f64,
-    /// Inclination at toe i0 [rad].
+    /// Inclination at toe i0 \[rad\].
     pub i0_rad: f64,
-    /// Cosine harmonic correction to the orbit radius Crc [m].
+    /// Cosine harmonic correction to the orbit radius Crc \[m\].
     pub crc_m: f64,
-    /// Argument of perigee omega [rad].
+    /// Argument of perigee omega \[rad\].
     pub omega_rad: f64,
     /// Rate of right ascension Omega_dot [rad/s].
     pub omega_dot_rad_per_s: f64,
@@ -75,39 +75,39 @@ pub struct GpsEphemeris {
     pub codes_l2: f64,
     /// L2 P data flag (RINEX field).
     pub l2p_flag: f64,
-    /// SV accuracy (URA) [m].
+    /// SV accuracy (URA) \[m\].
     pub sv_accuracy_m: f64,
     /// SV health (0 = all signals OK; IS-GPS-200 20.3.3.3.1.4).
     pub health: u32,
-    /// Group delay TGD [s] (IS-GPS-200 20.3.3.3.3.2): L1 C/A users subtract it from
+    /// Group delay TGD \[s\] (IS-GPS-200 20.3.3.3.3.2): L1 C/A users subtract it from
     /// the clock bias; it is not included in [`SatState::clock_bias_s`].
     pub tgd_s: f64,
     /// Issue of data, clock.
     pub iodc: u16,
     /// Transmission time of the message (GPST), when known.
     pub transmission_time: Option<GpsTime>,
-    /// Fit interval [h] (RINEX 3.04 gives hours; 0 = unknown, read as 4 h).
+    /// Fit interval \[h\] (RINEX 3.04 gives hours; 0 = unknown, read as 4 h).
     pub fit_interval_h: f64,
 }
 
 /// Satellite state at one instant (ECEF at time t = the ECEF frame at that instant).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SatState {
-    /// Antenna phase centre position in ECEF at t [m] (LNAV refers to the APC).
+    /// Antenna phase centre position in ECEF at t \[m\] (LNAV refers to the APC).
     pub pos_ecef_m: Vector3<f64>,
     /// Velocity relative to the rotating ECEF frame at t [m/s].
     pub vel_ecef_mps: Vector3<f64>,
-    /// af0 + af1 dt + af2 dt^2 + relativistic [s]; TGD not included.
+    /// af0 + af1 dt + af2 dt^2 + relativistic \[s\]; TGD not included.
     pub clock_bias_s: f64,
     /// Time derivative of clock_bias_s (including the relativistic term) [s/s].
     pub clock_drift_s_per_s: f64,
-    /// Relativistic term F e sqrt(A) sin(Ek) [s] (IS-GPS-200 20.3.3.3.3.1).
+    /// Relativistic term F e sqrt(A) sin(Ek) \[s\] (IS-GPS-200 20.3.3.3.3.1).
     pub relativistic_s: f64,
 }
 
 /// Eccentric anomaly from mean anomaly by Newton iteration (IS-GPS-200 Table 20-IV,
 /// Kepler's equation M = E - e sin E) to 1e-13 rad.
-pub fn solve_kepler(m_rad: f64, e: f64) -> f64 {
+pub(crate) fn solve_kepler(m_rad: f64, e: f64) -> f64 {
     let mut ek = m_rad;
     for _ in 0..KEPLER_MAX_ITER {
         let f = ek - e * ek.sin() - m_rad;
@@ -157,7 +157,7 @@ impl GpsEphemeris {
         }
     }
 
-    /// Fit interval [s]; 0 (unknown) is read as 4 h (IS-GPS-200 20.3.4.4, fit flag 0).
+    /// Fit interval \[s\]; 0 (unknown) is read as 4 h (IS-GPS-200 20.3.4.4, fit flag 0).
     pub fn fit_interval_s(&self) -> f64 {
         if self.fit_interval_h > 0.0 {
             self.fit_interval_h * 3_600.0

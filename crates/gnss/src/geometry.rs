@@ -17,22 +17,22 @@ pub struct SignalPath {
     /// an f64, so it resolves ~6e-11 s late in the week; use `transit_time_s` for
     /// the exact light time.
     pub t_tx: GpsTime,
-    /// Light time tau = geometric_range_m / c, converged to < 1e-12 s [s].
+    /// Light time tau = geometric_range_m / c, converged to < 1e-12 s \[s\].
     pub transit_time_s: f64,
-    /// Satellite position at t_tx, rotated into the ECEF frame at t_rx [m].
+    /// Satellite position at t_tx, rotated into the ECEF frame at t_rx \[m\].
     pub sat_pos_ecef_m: Vector3<f64>,
     /// d(sat_pos_ecef_m)/d(t_rx) for the given receiver motion [m/s]: the satellite's
     /// ECEF velocity at t_tx rotated like the position and scaled by (1 - dtau/dt),
     /// plus the frame-rotation term We dtau/dt (dR/dtheta) x. With this choice
     /// `range_rate_mps = los_unit . (sat_vel_ecef_mps - rx_vel)` exactly.
     pub sat_vel_ecef_mps: Vector3<f64>,
-    /// |sat_pos_ecef_m - rx_pos| [m].
+    /// |sat_pos_ecef_m - rx_pos| \[m\].
     pub geometric_range_m: f64,
     /// Unit vector from the receiver to the satellite (ECEF at t_rx).
     pub los_unit: Vector3<f64>,
     /// d(geometric_range_m)/d(t_rx) for the given receiver velocity [m/s].
     pub range_rate_mps: f64,
-    /// Satellite clock bias at t_tx (relativistic term included, TGD not) [s].
+    /// Satellite clock bias at t_tx (relativistic term included, TGD not) \[s\].
     pub sat_clock_bias_s: f64,
     /// Satellite clock drift at t_tx [s/s].
     pub sat_clock_drift_s_per_s: f64,
@@ -103,7 +103,7 @@ pub fn signal_path(
     }
 }
 
-/// Azimuth (from north, clockwise, [0, 2 pi)) and elevation [rad] of an ECEF unit
+/// Azimuth (from north, clockwise, [0, 2 pi)) and elevation \[rad\] of an ECEF unit
 /// line of sight seen from `rx_lla` = (lat rad, lon rad, h m).
 pub fn az_el(rx_lla: &Vector3<f64>, los_unit_ecef: &Vector3<f64>) -> (f64, f64) {
     let ned = c_ne(rx_lla.x, rx_lla.y).transpose() * los_unit_ecef;

@@ -7,11 +7,11 @@ use crate::time::GpsTime;
 #[derive(Clone, Debug, PartialEq)]
 pub struct SatObs {
     pub prn: u8,
-    /// C1C [m].
+    /// C1C \[m\].
     pub pseudorange_m: Option<f64>,
-    /// L1C [cycles].
+    /// L1C \[cycles\].
     pub carrier_cycles: Option<f64>,
-    /// D1C [Hz].
+    /// D1C \[Hz\].
     pub doppler_hz: Option<f64>,
     /// S1C [dB-Hz].
     pub cn0_dbhz: Option<f64>,
@@ -27,7 +27,7 @@ pub struct ObsEpoch {
     pub t: GpsTime,
     /// Epoch flag, 0 or 1.
     pub flag: u8,
-    /// Receiver clock offset [s], if the file gives it.
+    /// Receiver clock offset \[s\], if the file gives it.
     pub rx_clock_offset_s: Option<f64>,
     /// GPS satellites, in file order.
     pub sats: Vec<SatObs>,

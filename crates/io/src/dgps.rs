@@ -5,7 +5,7 @@
 //! `#` / `%` comment lines and blank lines are skipped anywhere; the first other line
 //! must be the header `t_s,prn,prc_m,rrc_mps,iode`. Records: t_s [GPS s of week, in
 //! [0, 604800)],
-//! prn (GPS 1-32), prc_m [m], rrc_mps [m/s], iode (integer 0-65535; empty or left out
+//! prn (GPS 1-32), prc_m \[m\], rrc_mps [m/s], iode (integer 0-65535; empty or left out
 //! means unknown). Times must not decrease, except at a GPS week rollover (a
 //! drop of more than half a week): the following times are moved on by 604800 s, so
 //! the list keeps one continuous scale (seconds of the first record's week). The
@@ -17,6 +17,7 @@
 use crate::error::{shorten, InputError};
 use crate::fmt::{field, is_comment_line, parse_f64, parse_i64, split_fields, LineReader};
 use nalgebra::Vector3;
+use navfuse_core::time::SECONDS_PER_WEEK;
 use navfuse_gnss::dgps::DgpsCorrection;
 use std::path::Path;
 
@@ -24,7 +25,7 @@ use std::path::Path;
 #[derive(Clone, Debug, PartialEq)]
 pub struct DgpsFile {
     pub corrections: Vec<DgpsCorrection>,
-    /// Reference station latitude [rad], longitude [rad], ellipsoidal height [m],
+    /// Reference station latitude \[rad\], longitude \[rad\], ellipsoidal height \[m\],
     /// when a comment line gives it.
     pub reference_lla: Option<Vector3<f64>>,
 }
@@ -32,7 +33,6 @@ pub struct DgpsFile {
 /// The required header fields.
 pub const DGPS_HEADER: [&str; 5] = ["t_s", "prn", "prc_m", "rrc_mps", "iode"];
 const WHAT: &str = "t_s, prn, prc_m, rrc_mps, iode";
-const SECONDS_PER_WEEK: f64 = 604_800.0;
 
 /// Read the corrections of a DGPS correction file; see the module documentation.
 pub fn read_dgps_corrections(path: &Path) -> Result<Vec<DgpsCorrection>, InputError> {

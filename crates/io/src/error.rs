@@ -160,8 +160,8 @@ impl InputError {
 
 /// Smallest and largest accepted magnitude of a std, variance, rate or scale in SI
 /// units: its square stays a finite normal number.
-pub const SCALE_MIN_SI: f64 = 1e-150;
-pub const SCALE_MAX_SI: f64 = 1e150;
+pub(crate) const SCALE_MIN_SI: f64 = 1e-150;
+pub(crate) const SCALE_MAX_SI: f64 = 1e150;
 
 /// Check a std, variance, rate or scale after conversion to SI: `value` is what the
 /// file gave, `si` the converted value. It must be > 0 and finite, and its square
@@ -186,7 +186,7 @@ pub fn check_scale(what: &str, value: f64, si: f64) -> Result<f64, String> {
 }
 
 /// Check a value after unit scaling: `value` finite as read, `si` must be finite too.
-pub fn check_finite_si(value: f64, si: f64) -> Result<f64, String> {
+pub(crate) fn check_finite_si(value: f64, si: f64) -> Result<f64, String> {
     if si.is_finite() {
         Ok(si)
     } else {

@@ -12,7 +12,7 @@ use std::io::{BufRead, BufReader, Read, Write};
 use std::path::{Path, PathBuf};
 
 /// Capacity of the read and write buffers (1 MiB).
-pub const BUF_CAPACITY: usize = 1 << 20;
+pub(crate) const BUF_CAPACITY: usize = 1 << 20;
 
 /// Longest accepted line (1 MiB, without its line end): longer is an error, so a
 /// file without line ends cannot fill the memory.
@@ -99,7 +99,7 @@ impl LineReader {
 /// Call `f` on every line. An error on a last line without line end (a log cut
 /// mid-write) becomes a warning ([`InputError::last_line_warning`]) pushed to `warnings`, and the
 /// line is dropped; an error on any other line is returned.
-pub fn for_each_line<F>(
+pub(crate) fn for_each_line<F>(
     lines: &mut LineReader,
     warnings: &mut Vec<String>,
     mut f: F,
@@ -123,7 +123,7 @@ where
 /// What follows one record's result in a reader that tolerates a damaged last line
 /// when given `warnings`: `Ok(true)` read on, `Ok(false)` stop (the last line, cut
 /// mid-write, dropped with a warning), `Err` the record's error.
-pub fn after_record(
+pub(crate) fn after_record(
     result: Result<(), InputError>,
     ln: usize,
     lines: &mut LineReader,
@@ -144,7 +144,7 @@ pub fn after_record(
 /// An error of [`for_each_line`]'s callback: in a data line (dropped with a warning on
 /// the last line) or fatal wherever it is (a header).
 #[derive(Debug)]
-pub enum LineError {
+pub(crate) enum LineError {
     Data(InputError),
     Fatal(InputError),
 }
@@ -252,7 +252,7 @@ pub fn parse_f64(s: &[u8]) -> Option<f64> {
 /// ends at the end of `s` or at a field separator (space, tab, comma, CR). Returns the
 /// value and its length, or None (not plain, too long, or followed by other text).
 #[inline]
-pub fn parse_prefix(s: &[u8]) -> Option<(f64, usize)> {
+pub(crate) fn parse_prefix(s: &[u8]) -> Option<(f64, usize)> {
     let len = s.len();
     let mut i = 0;
     let neg = match s.first() {
@@ -335,7 +335,7 @@ fn take_digits(s: &[u8], mut i: usize, m: &mut u64) -> usize {
 /// all take the fast path and are separated by whitespace and at most one comma.
 /// None means "use the general path" (which also produces the precise error).
 #[inline]
-pub fn parse_first_n<const N: usize>(line: &[u8]) -> Option<[f64; N]> {
+pub(crate) fn parse_first_n<const N: usize>(line: &[u8]) -> Option<[f64; N]> {
     let mut out = [0.0; N];
     let mut i = skip_ws(line, 0);
     for (k, slot) in out.iter_mut().enumerate() {
@@ -367,7 +367,7 @@ fn skip_ws(s: &[u8], mut i: usize) -> usize {
 }
 
 /// Parse a plain integer `[-+]digits` (no dot, no exponent), None otherwise.
-pub fn parse_i64(s: &[u8]) -> Option<i64> {
+pub(crate) fn parse_i64(s: &[u8]) -> Option<i64> {
     let (neg, digits) = match s.first() {
         Some(b'-') => (true, s.get(1..).unwrap_or(&[])),
         Some(b'+') => (false, s.get(1..).unwrap_or(&[])),
@@ -388,7 +388,7 @@ pub fn parse_i64(s: &[u8]) -> Option<i64> {
 
 /// True for lines every text reader skips: blank, or starting with `#` or `%`.
 #[inline]
-pub fn is_comment_line(line: &[u8], fields: &[(usize, usize)]) -> bool {
+pub(crate) fn is_comment_line(line: &[u8], fields: &[(usize, usize)]) -> bool {
     match fields.first() {
         None => true,
         Some(&(s, _)) => matches!(line.get(s), Some(b'#') | Some(b'%')),

@@ -382,7 +382,7 @@ fn read_pos(
                     format!("expected a GPS week number, found {w}"),
                 )));
             }
-            if !(0.0..SECONDS_PER_WEEK as f64 + 1.0).contains(&tow) {
+            if !(0.0..SECONDS_PER_WEEK + 1.0).contains(&tow) {
                 return Err(LineError::Data(InputError::at_field(
                     path,
                     ln,
@@ -393,7 +393,7 @@ fn read_pos(
             (w as u32, tow)
         };
         let w0 = week0.unwrap_or(week);
-        let t_file = (i64::from(week) - i64::from(w0)) as f64 * SECONDS_PER_WEEK as f64 + sow;
+        let t_file = (i64::from(week) - i64::from(w0)) as f64 * SECONDS_PER_WEEK + sow;
         l.check_time(t_file, prev)?;
         let lla = l.lla(2, ["lat", "lon", "height"])?;
         let q = l.num(5, "Q")?;

@@ -1,10 +1,12 @@
 //! What to read and how: the input and output descriptions shared by the config
 //! loader (`config.rs`) and the readers. Plain data, documented in docs/FORMATS.md.
 
+use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
 /// What the IMU columns hold.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum ImuQuantity {
     /// Angular rate and specific force; converted to increments over each interval.
     Rate,
@@ -13,7 +15,8 @@ pub enum ImuQuantity {
 }
 
 /// How a rate sample relates to its time tag.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum RateSampling {
     /// Instantaneous value at t_k: increment = (w_{k-1} + w_k) / 2 * dt (trapezoid).
     Instant,
@@ -21,36 +24,45 @@ pub enum RateSampling {
     IntervalMean,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum TimeUnit {
+    #[serde(rename = "s")]
     Seconds,
+    #[serde(rename = "ms")]
     Milliseconds,
+    #[serde(rename = "us")]
     Microseconds,
+    #[serde(rename = "ns")]
     Nanoseconds,
 }
 
 /// Which clock the time column counts in.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum TimeScale {
     /// GPS seconds of week (as KF-GINS).
+    #[serde(rename = "gps_sow")]
     GpsSecondsOfWeek,
     /// GPS time counted from the Unix epoch with no leap seconds (RTKLIB tag files).
+    #[serde(rename = "gpst_unix")]
     GpstUnix,
 }
 
 /// Gyro column unit: rates (rad/s, deg/s) or increments (rad, deg).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum GyroUnit {
     Rad,
     Deg,
 }
 
 /// Accelerometer column unit (per second for rates; m/s or g*s for increments).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum AccelUnit {
     /// m/s² (rates) or m/s (increments).
+    #[serde(rename = "m")]
     Metre,
     /// Standard gravity 9.80665 m/s² (rates) or g*s (increments).
+    #[serde(rename = "g")]
     G,
 }
 
@@ -104,7 +116,7 @@ pub struct RtklibExplorerImuOptions {
 /// Where the IMU data come from.
 #[derive(Clone, Debug, PartialEq)]
 pub enum ImuFormat {
-    /// KF-GINS text: t, dtheta xyz [rad], dvel xyz [m/s]; 7 columns or more.
+    /// KF-GINS text: t, dtheta xyz \[rad\], dvel xyz [m/s]; 7 columns or more.
     KfGins,
     Csv(CsvImuOptions),
     RtklibExplorer(RtklibExplorerImuOptions),
@@ -132,9 +144,9 @@ impl Default for GapPolicy {
 pub struct ImuSource {
     pub path: PathBuf,
     pub format: ImuFormat,
-    /// Nominal sample rate [Hz]; used for the first interval and after gaps.
+    /// Nominal sample rate \[Hz\]; used for the first interval and after gaps.
     pub rate_hz: f64,
-    /// Sensor-to-body rotation, ZYX Euler (roll, pitch, yaw) [deg]:
+    /// Sensor-to-body rotation, ZYX Euler (roll, pitch, yaw) \[deg\]:
     /// v_body = Rz(yaw) Ry(pitch) Rx(roll) v_sensor. Zero for KF-GINS files.
     pub sensor_to_body_rpy_deg: [f64; 3],
     /// Seconds added to every IMU time tag (latency correction).
@@ -145,7 +157,7 @@ pub struct ImuSource {
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum GnssFormat {
-    /// KF-GINS: t, lat, lon [deg], h [m], std N E D [m] (7 columns); 13 columns add
+    /// KF-GINS: t, lat, lon \[deg\], h \[m\], std N E D \[m\] (7 columns); 13 columns add
     /// vel N E D [m/s] and its std.
     KfGins,
     /// RTKLIB solution (.pos), lat/lon/height form, optional velocity columns.
@@ -160,7 +172,8 @@ pub enum GnssFormat {
 }
 
 /// How RINEX observations are used.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Coupling {
     /// Single point positioning fixes (position + Doppler velocity) fused as fixes.
     Loose,
@@ -173,7 +186,7 @@ pub enum Coupling {
 pub struct RinexGnss {
     pub nav_path: PathBuf,
     pub coupling: Coupling,
-    /// Satellites below this elevation are not used [deg].
+    /// Satellites below this elevation are not used \[deg\].
     pub elevation_mask_deg: f64,
     /// Single point positioning's residual test with fault exclusion. Off for data
     /// whose errors the broadcast error model does not cover (e.g. Selective
@@ -187,7 +200,7 @@ pub struct RinexGnss {
 #[derive(Clone, Debug, PartialEq)]
 pub struct DgpsSource {
     pub kind: DgpsKind,
-    /// Corrections older than this are not applied [s].
+    /// Corrections older than this are not applied \[s\].
     pub max_age_s: f64,
 }
 
@@ -196,7 +209,7 @@ pub enum DgpsKind {
     /// A corrections file (`t_s,prn,prc_m,rrc_mps,iode`, docs/FORMATS.md).
     Corrections(PathBuf),
     /// A reference station's RINEX observations at a known position
-    /// (latitude, longitude [rad], ellipsoidal height [m]).
+    /// (latitude, longitude \[rad\], ellipsoidal height \[m\]).
     ReferenceStation {
         obs_path: PathBuf,
         position_lla: [f64; 3],
@@ -207,7 +220,7 @@ pub enum DgpsKind {
 pub struct GnssSource {
     pub path: PathBuf,
     pub format: GnssFormat,
-    /// Keep only epochs within 1 ms of a multiple of this interval [s] (e.g. 1.0 to
+    /// Keep only epochs within 1 ms of a multiple of this interval \[s\] (e.g. 1.0 to
     /// turn 4 Hz into 1 Hz); None keeps all.
     pub decimate_s: Option<f64>,
     /// Seconds added to every GNSS time tag.
@@ -217,7 +230,7 @@ pub struct GnssSource {
 /// What to write and how often.
 #[derive(Clone, Debug, PartialEq)]
 pub struct OutputSpec {
-    /// Output rate [Hz]; None = every IMU epoch (KF-GINS behaviour).
+    /// Output rate \[Hz\]; None = every IMU epoch (KF-GINS behaviour).
     pub rate_hz: Option<f64>,
     /// `solution.nav` (KF-GINS 11 columns) is always written.
     /// `imu_err.txt` (KF-GINS IMU_ERR, 13 columns).
@@ -226,6 +239,18 @@ pub struct OutputSpec {
     pub std: bool,
     /// `solution.csv` with a header row.
     pub csv: bool,
+}
+
+impl Default for OutputSpec {
+    /// Every IMU epoch, `imu_err.txt` and `std.txt`, no CSV (docs/CONFIG.md `[output]`).
+    fn default() -> Self {
+        OutputSpec {
+            rate_hz: None,
+            imu_err: true,
+            std: true,
+            csv: false,
+        }
+    }
 }
 
 /// What an odometer file holds (docs/FORMATS.md "Odometer").
@@ -255,4 +280,23 @@ pub struct OdometerSource {
 #[derive(Clone, Debug, PartialEq)]
 pub struct HeadingSource {
     pub path: PathBuf,
+}
+
+/// The aiding inputs on the IMU time scale that need no week alignment, read and
+/// turned into measurements: one line per reader (the barometer). A reader's
+/// warnings (a damaged last line dropped) go to `warnings`.
+pub fn read_aiding_inputs(
+    cfg: &crate::config::RunConfig,
+    warnings: &mut Vec<String>,
+) -> Result<Vec<navfuse_core::Measurement>, crate::error::InputError> {
+    use navfuse_core::Measurement;
+    let mut out = Vec::new();
+    if let Some(src) = cfg.baro.as_ref().filter(|_| cfg.nav.baro.enabled) {
+        let b = crate::baro::read_baro(src, warnings)?;
+        if b.is_empty() {
+            warnings.push(format!("{}: no barometer records", src.path.display()));
+        }
+        out.extend(b.into_iter().map(Measurement::Baro));
+    }
+    Ok(out)
 }

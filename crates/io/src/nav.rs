@@ -10,13 +10,14 @@ use crate::fmt::{
 };
 use nalgebra::Vector3;
 use navfuse_core::attitude::{euler_from_q_bn, q_bn_from_euler, wrap_2pi};
+use navfuse_core::time::SECONDS_PER_WEEK;
 use navfuse_core::{ImuErrors, NavState};
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 /// Capacity of each writer's buffer (1 MiB).
-pub const WRITE_BUF_CAPACITY: usize = 1 << 20;
+pub(crate) const WRITE_BUF_CAPACITY: usize = 1 << 20;
 
 /// rad/s -> deg/h.
 const RADPS_TO_DEGPH: f64 = 180.0 / std::f64::consts::PI * 3600.0;
@@ -32,8 +33,8 @@ pub struct SolutionRecord {
     pub gps_week: u32,
     pub nav: NavState,
     pub imu_errors: ImuErrors,
-    /// 1-sigma in SI, in this order: pos N E D [m], vel N E D [m/s], att roll pitch yaw
-    /// [rad], gyro bias xyz [rad/s], accel bias xyz [m/s²], gyro scale xyz [-], accel
+    /// 1-sigma in SI, in this order: pos N E D \[m\], vel N E D [m/s], att roll pitch yaw
+    /// \[rad\], gyro bias xyz [rad/s], accel bias xyz [m/s²], gyro scale xyz [-], accel
     /// scale xyz [-].
     pub std: Option<[f64; 21]>,
     /// GNSS integrity flag (navfuse_core::integrity::IntegrityState::flag: 0 trusted,
@@ -41,9 +42,9 @@ pub struct SolutionRecord {
     pub gnss_integrity: Option<u8>,
 }
 
-/// The 11 `.nav` values: week, t, lat [deg], lon [deg], h [m], vN vE vD [m/s],
-/// roll pitch yaw [deg] with yaw in [0, 360) (also after rounding to 9 decimals).
-pub fn nav_fields(r: &SolutionRecord) -> [f64; 11] {
+/// The 11 `.nav` values: week, t, lat \[deg\], lon \[deg\], h \[m\], vN vE vD [m/s],
+/// roll pitch yaw \[deg\] with yaw in [0, 360) (also after rounding to 9 decimals).
+pub(crate) fn nav_fields(r: &SolutionRecord) -> [f64; 11] {
     let n = &r.nav;
     let rpy = euler_from_q_bn(&n.q_bn);
     let mut yaw = wrap_2pi(rpy.z).to_degrees();
@@ -66,9 +67,9 @@ pub fn nav_fields(r: &SolutionRecord) -> [f64; 11] {
     ]
 }
 
-/// The 12 IMU error values in KF-GINS units: gyro bias [deg/h], accel bias [mGal],
-/// gyro scale [ppm], accel scale [ppm], x y z each.
-pub fn imu_err_fields(e: &ImuErrors) -> [f64; 12] {
+/// The 12 IMU error values in KF-GINS units: gyro bias [deg/h], accel bias \[mGal\],
+/// gyro scale \[ppm\], accel scale \[ppm\], x y z each.
+pub(crate) fn imu_err_fields(e: &ImuErrors) -> [f64; 12] {
     let g = e.gyro_bias * RADPS_TO_DEGPH;
     let a = e.accel_bias * MPS2_TO_MGAL;
     let sg = e.gyro_scale * TO_PPM;
@@ -78,9 +79,9 @@ pub fn imu_err_fields(e: &ImuErrors) -> [f64; 12] {
     ]
 }
 
-/// The 21 std values in KF-GINS units: pos [m], vel [m/s], att [deg], gyro bias
-/// [deg/h], accel bias [mGal], gyro scale [ppm], accel scale [ppm].
-pub fn std_fields(std: &[f64; 21]) -> [f64; 21] {
+/// The 21 std values in KF-GINS units: pos \[m\], vel [m/s], att \[deg\], gyro bias
+/// [deg/h], accel bias \[mGal\], gyro scale \[ppm\], accel scale \[ppm\].
+pub(crate) fn std_fields(std: &[f64; 21]) -> [f64; 21] {
     let mut out = *std;
     for (k, v) in out.iter_mut().enumerate() {
         *v *= match k {
@@ -186,8 +187,8 @@ macro_rules! record_writer {
 }
 record_writer!(NavWriter, ImuErrWriter, StdWriter, CsvWriter);
 
-/// KF-GINS navigation result (`.nav`), 11 columns: week, t [s], lat [deg], lon [deg],
-/// h [m], vN vE vD [m/s], roll pitch yaw [deg].
+/// KF-GINS navigation result (`.nav`), 11 columns: week, t \[s\], lat \[deg\], lon \[deg\],
+/// h \[m\], vN vE vD [m/s], roll pitch yaw \[deg\].
 pub struct NavWriter {
     out: Out,
 }
@@ -213,8 +214,8 @@ impl NavWriter {
     }
 }
 
-/// KF-GINS `IMU_ERR` file, 13 columns: t [s], gyro bias xyz [deg/h], accel bias xyz
-/// [mGal], gyro scale xyz [ppm], accel scale xyz [ppm].
+/// KF-GINS `IMU_ERR` file, 13 columns: t \[s\], gyro bias xyz [deg/h], accel bias xyz
+/// \[mGal\], gyro scale xyz \[ppm\], accel scale xyz \[ppm\].
 pub struct ImuErrWriter {
     out: Out,
     same: SameText<12>,
@@ -277,9 +278,9 @@ impl<const N: usize> SameText<N> {
     }
 }
 
-/// KF-GINS `STD` file, 22 columns: t [s], pos std N E D [m], vel std N E D [m/s], att
-/// std roll pitch yaw [deg], gyro bias std [deg/h], accel bias std [mGal], gyro scale
-/// std [ppm], accel scale std [ppm] (x y z each).
+/// KF-GINS `STD` file, 22 columns: t \[s\], pos std N E D \[m\], vel std N E D [m/s], att
+/// std roll pitch yaw \[deg\], gyro bias std [deg/h], accel bias std \[mGal\], gyro scale
+/// std \[ppm\], accel scale std \[ppm\] (x y z each).
 pub struct StdWriter {
     out: Out,
     same: SameText<21>,
@@ -388,8 +389,8 @@ impl CsvWriter {
     }
 }
 
-/// Read a KF-GINS-style `.nav` file (11 columns: week, t, lat [deg], lon [deg], h [m],
-/// vN vE vD [m/s], roll pitch yaw [deg]). Checks: 11 columns, finite numbers, week a
+/// Read a KF-GINS-style `.nav` file (11 columns: week, t, lat \[deg\], lon \[deg\], h \[m\],
+/// vN vE vD [m/s], roll pitch yaw \[deg\]). Checks: 11 columns, finite numbers, week a
 /// non-negative integer, lat in [-90, 90], time (week * 604800 + t) strictly
 /// increasing. Attitude becomes q_bn via ZYX Euler angles.
 pub fn read_nav(path: &Path) -> Result<Vec<(u32, NavState)>, InputError> {
@@ -440,7 +441,7 @@ pub fn read_nav(path: &Path) -> Result<Vec<(u32, NavState)>, InputError> {
                 format!("expected a latitude in [-90, 90] deg, found {lat}"),
             ));
         }
-        let key = week * 604_800.0 + t;
+        let key = week * SECONDS_PER_WEEK + t;
         match prev {
             Some(p) if key == p => {
                 return Err(InputError::at_field(
@@ -457,7 +458,7 @@ pub fn read_nav(path: &Path) -> Result<Vec<(u32, NavState)>, InputError> {
                     "t",
                     format!(
                         "time {t} goes backwards (previous {})",
-                        p - week * 604_800.0
+                        p - week * SECONDS_PER_WEEK
                     ),
                 ))
             }

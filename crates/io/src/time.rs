@@ -1,20 +1,17 @@
-//! GPS time helpers (no leap seconds anywhere: everything here is GPST).
-//!
-//! - GPST calendar date and time -> (GPS week, seconds of week), and back.
-//! - "GPST as Unix seconds" (RTKLIB tag files): seconds since 1970-01-01 00:00:00
-//!   counted in GPS time, so the GPS epoch 1980-01-06 00:00:00 is 315964800.
+//! GPS time helpers of the file formats (no leap seconds anywhere: everything here is
+//! GPST): the RTKLIB calendar form (`YYYY/MM/DD HH:MM:SS.sss`) -> (GPS week, seconds
+//! of week), and back. The GPS time type, the week length and the "GPST as Unix
+//! seconds" conversions (RTKLIB tag files) are `navfuse_core::time`, re-exported here.
 
 use std::fmt;
 
-/// The GPS epoch (1980-01-06 00:00:00 GPST) in GPST-as-Unix seconds.
-pub const GPS_EPOCH_UNIX: i64 = 315_964_800;
-/// Seconds in a GPS week.
-pub const SECONDS_PER_WEEK: i64 = 604_800;
-/// Seconds in a GPS week, as f64.
-pub const SECONDS_PER_WEEK_F64: f64 = 604_800.0;
-
-// Proleptic Gregorian day arithmetic lives in the GNSS layer (one copy).
-pub use navfuse_gnss::time::{civil_from_days, days_from_civil, days_in_month};
+// The week length, the GPS epoch, the GPST-as-Unix conversions and the proleptic
+// Gregorian day arithmetic live in the core (the workspace's one GPS time module).
+pub use navfuse_core::time::{
+    civil_from_days, days_from_civil, days_in_month, gpst_unix_parts_to_week_sow,
+    gpst_unix_to_week_sow, week_sow_to_gpst_unix, GPS_EPOCH_UNIX, SECONDS_PER_WEEK,
+    SECONDS_PER_WEEK_I64,
+};
 
 /// A GPST calendar date and time of day.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -69,44 +66,6 @@ pub fn calendar_to_week_sow(c: &Calendar) -> Option<(u32, f64)> {
     u32::try_from(week).ok().map(|w| (w, sow))
 }
 
-/// GPST-as-Unix seconds -> (GPS week, seconds of week). None before the GPS epoch or
-/// for non-finite input.
-pub fn gpst_unix_to_week_sow(unix_s: f64) -> Option<(u32, f64)> {
-    if !unix_s.is_finite() {
-        return None;
-    }
-    let whole = unix_s.floor();
-    if whole.abs() > 1e15 {
-        return None;
-    }
-    gpst_unix_parts_to_week_sow(whole as i64, unix_s - whole)
-}
-
-/// GPST-as-Unix time given as whole seconds plus a fraction (keeps full precision,
-/// as in RTKLIB tag files) -> (GPS week, seconds of week).
-pub fn gpst_unix_parts_to_week_sow(whole_s: i64, frac_s: f64) -> Option<(u32, f64)> {
-    if !frac_s.is_finite() {
-        return None;
-    }
-    let since = whole_s.checked_sub(GPS_EPOCH_UNIX)?;
-    let mut week = since.div_euclid(SECONDS_PER_WEEK);
-    let mut sow = since.rem_euclid(SECONDS_PER_WEEK) as f64 + frac_s;
-    // Carry a fraction outside [0, 1) into the week if needed.
-    if sow >= SECONDS_PER_WEEK_F64 {
-        sow -= SECONDS_PER_WEEK_F64;
-        week += 1;
-    } else if sow < 0.0 {
-        sow += SECONDS_PER_WEEK_F64;
-        week -= 1;
-    }
-    u32::try_from(week).ok().map(|w| (w, sow))
-}
-
-/// (GPS week, seconds of week) -> GPST-as-Unix seconds. `sow` may exceed a week.
-pub fn week_sow_to_gpst_unix(week: u32, sow: f64) -> f64 {
-    (GPS_EPOCH_UNIX + i64::from(week) * SECONDS_PER_WEEK) as f64 + sow
-}
-
 /// (GPS week, seconds of week) -> GPST calendar. `sow` may be negative or exceed a
 /// week (it is normalised); it is clamped to +-1e12 s, and a non-finite `sow` gives
 /// the week start.
@@ -118,7 +77,7 @@ pub fn week_sow_to_calendar(week: u32, sow: f64) -> Calendar {
     };
     let whole = sow.floor();
     let frac = sow - whole;
-    let total = i64::from(week) * SECONDS_PER_WEEK + whole as i64; // since GPS epoch
+    let total = i64::from(week) * SECONDS_PER_WEEK_I64 + whole as i64; // since GPS epoch
     let days = total.div_euclid(86_400);
     let sod = total.rem_euclid(86_400);
     let (year, month, day) = civil_from_days(days_from_civil(1980, 1, 6) + days);
@@ -193,30 +152,6 @@ mod tests {
         assert_eq!(calendar_to_week_sow(&cal(2023, 1, 1, 0, 60, 0.0)), None);
         assert_eq!(calendar_to_week_sow(&cal(2023, 1, 1, 0, 0, f64::NAN)), None);
         assert_eq!(calendar_to_week_sow(&cal(2023, 1, 1, 0, 0, -1.0)), None);
-    }
-
-    #[test]
-    fn unix_round_trip() {
-        for &(w, sow) in &[
-            (0u32, 0.0),
-            (2374, 243_258.499),
-            (2379, 604_799.75),
-            (1, 3.0),
-        ] {
-            let u = week_sow_to_gpst_unix(w, sow);
-            let (w2, sow2) = gpst_unix_to_week_sow(u).unwrap();
-            assert_eq!(w2, w);
-            assert!((sow2 - sow).abs() < 1e-6, "{sow} {sow2}");
-        }
-        // Parts keep precision and carry.
-        assert_eq!(
-            gpst_unix_parts_to_week_sow(GPS_EPOCH_UNIX + SECONDS_PER_WEEK - 1, 1.0),
-            Some((1, 0.0))
-        );
-        assert_eq!(
-            gpst_unix_parts_to_week_sow(GPS_EPOCH_UNIX + SECONDS_PER_WEEK, -0.25),
-            Some((0, 604_799.75))
-        );
     }
 
     #[test]

@@ -2,7 +2,7 @@
 //! after conversion to SI, a cut last line dropped with a warning, IMU gaps bridged,
 //! line length bounded, DGPS times, config round trips of every example.
 
-use navfuse_io::config::{load, parse_toml_str};
+use navfuse_io::config::{load, parse_toml_str, RunConfig, TomlStyle};
 use navfuse_io::gnss::read_gnss;
 use navfuse_io::heading::read_heading;
 use navfuse_io::imu::open_imu;
@@ -278,4 +278,45 @@ fn heading_and_odometer_cut_last_line() {
         "{w:?}"
     );
     assert!(read_odometer(&src).is_err());
+}
+
+/// Every example config written with the defaults left out and paths relative to its
+/// directory loads to the same configuration, bit for bit; and writing every key is
+/// exact too: a second load gives the same values.
+#[test]
+fn example_configs_written_minimal_and_exact_load_the_same() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let bits = |c: &RunConfig| {
+        format!(
+            "{:?}",
+            RunConfig {
+                source_path: PathBuf::new(),
+                kfgins_output_path: None,
+                warnings: Vec::new(),
+                ..c.clone()
+            }
+        )
+    };
+    let mut n = 0;
+    for dir in ["examples", "examples/demo"] {
+        for e in std::fs::read_dir(root.join(dir)).unwrap() {
+            let p = e.unwrap().path();
+            if !p.extension().is_some_and(|x| x == "toml" || x == "yaml") {
+                continue;
+            }
+            let c = load(&p).unwrap_or_else(|e| panic!("{e}"));
+            let style = TomlStyle {
+                relative_to: p.parent().map(Path::to_path_buf),
+                omit_defaults: true,
+                keep: Vec::new(),
+            };
+            let text = c.to_toml_with(&style);
+            let d = parse_toml_str(&text, &p).unwrap_or_else(|e| panic!("{e}\n{text}"));
+            assert_eq!(bits(&d), bits(&c), "{}\n{text}", p.display());
+            let full = parse_toml_str(&c.to_toml_string(), &p).unwrap();
+            assert_eq!(bits(&full), bits(&c), "{}", p.display());
+            n += 1;
+        }
+    }
+    assert!(n >= 6, "only {n} configs");
 }

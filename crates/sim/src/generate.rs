@@ -18,9 +18,11 @@ use navfuse_io::nav::{ImuErrWriter, NavWriter, SolutionRecord};
 use navfuse_io::rinex_nav::{read_rinex_nav, write_rinex3_nav_dated, RinexNav};
 use navfuse_io::rinex_obs::{ObsHeader, RinexObsWriter};
 
+use crate::baro_sim::BaroSim;
 use crate::gnss_sim::{EventSpec, GnssSim};
 use crate::imu_model::{ImuErrorModel, ImuOutput};
 use crate::random::Stream;
+use crate::run_config::run_config_text;
 use crate::scenario::Scenario;
 use crate::trajectory::{TruthGenerator, TruthSample};
 
@@ -173,6 +175,19 @@ pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError>
     let mut distance = 0.0_f64;
     let mut odo_pulses_prev: i64 = 0;
     let mut odo_t_prev = traj.t_start();
+
+    // Barometer (baro_sim.rs): pressure readings and the true bias beside them.
+    let mut baro = match &sc.file.baro {
+        Some(b) => {
+            let mut o = Out::create(out_dir, "baro.txt", &mut files)?;
+            o.put(b"# t [s of GPS week], pressure [Pa]\n")?;
+            let mut tr = Out::create(out_dir, "baro_truth.txt", &mut files)?;
+            tr.put(b"# t [s of GPS week, time of validity], barometer error without its white noise [m]\n")?;
+            let every = (imu_rate / b.rate_hz).round().max(1.0) as u64;
+            Some((BaroSim::new(b, seed, traj.t_start()), every, o, tr))
+        }
+        None => None,
+    };
 
     // GNSS.
     let gspec = sc.file.gnss.clone();
@@ -461,6 +476,13 @@ pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError>
             )?;
             summary.truth_epochs += 1;
         }
+        if let Some((sim, every, o, tr)) = baro.as_mut() {
+            if k % *every == 0 {
+                let r = sim.sample(cur.t, cur.lla.z);
+                o.put(format!("{:.9} {:.4}\n", r.t_tag, r.pressure_pa).as_bytes())?;
+                tr.put(format!("{:.9} {:.6}\n", cur.t, r.bias_m).as_bytes())?;
+            }
+        }
         if let (Some(o), Some(every), Some(spec)) = (odo_out.as_mut(), odo_every, odo.as_ref()) {
             if k % every == 0 {
                 // SYSTEM.md §4b: true distance = (1 + dk) K_OD N.
@@ -494,9 +516,15 @@ pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError>
     if let Some(w) = err_out {
         w.finish()?;
     }
-    for o in [odo_out, fix_out, head_out, dgps_out, err_csv]
-        .into_iter()
-        .flatten()
+    let (baro_out, baro_truth) = match baro {
+        Some((_, _, o, tr)) => (Some(o), Some(tr)),
+        None => (None, None),
+    };
+    for o in [
+        odo_out, fix_out, head_out, dgps_out, err_csv, baro_out, baro_truth,
+    ]
+    .into_iter()
+    .flatten()
     {
         o.finish()?;
     }
@@ -602,125 +630,9 @@ fn write_events(sc: &Scenario, dir: &Path, files: &mut Vec<String>) -> Result<()
     o.finish()
 }
 
-/// run.toml: a navfuse run configuration for the generated files (loose coupling on
-/// gnss.txt when there are fixes, pure inertial otherwise), initialised from the truth,
-/// with the IMU noise model of the simulated grade. With an odometer: odometer.txt
-/// with the nominal K_OD, the scenario's lever arm to the reference point and the
-/// mounting estimated from zero (1 deg); with dual-antenna heading: heading.txt with
-/// the scenario's baseline. NHC and ZUPT stay off.
+/// run.toml: [`run_config_text`].
 fn write_run_config(sc: &Scenario, dir: &Path, files: &mut Vec<String>) -> Result<(), InputError> {
-    let t0 = sc.trajectory.t_start();
-    let mut g = TruthGenerator::new(&sc.trajectory, sc.rig, sc.imu.rate_hz);
-    let s0 = g.current();
-    let _ = g.step();
-    let e = s0.euler();
-    let grade = &sc.imu_grade;
-    const RAD_TO_DEG: f64 = 180.0 / std::f64::consts::PI;
-    let tiny = |x: f64, floor: f64| if x > floor { x } else { floor };
-    let arw = tiny(grade.gyro.white_noise_density * RAD_TO_DEG * 60.0, 1e-5);
-    let vrw = tiny(grade.accel.white_noise_density * 60.0, 1e-5);
-    let gb = tiny(
-        grade.gyro.turn_on_bias_sigma.hypot(grade.gyro.gm_sigma()) * RAD_TO_DEG * 3600.0,
-        1e-4,
-    );
-    let ab = tiny(
-        grade.accel.turn_on_bias_sigma.hypot(grade.accel.gm_sigma()) * 1e5,
-        1e-2,
-    );
-    let gs = tiny(grade.gyro.scale_sigma * 1e6, 1.0);
-    let asc = tiny(grade.accel.scale_sigma * 1e6, 1.0);
-    // One Gauss-Markov state per bias carries both the turn-on bias (a constant) and
-    // the in-run instability, so its correlation time is at least 1 h (as in
-    // `navfuse reproduce`): a short one would let the filter forget the turn-on bias
-    // it has learnt within that time whenever the aiding is weak.
-    let tau_h = {
-        let t = grade.gyro.bias_corr_time_s;
-        if t.is_finite() && t > 3600.0 {
-            t / 3600.0
-        } else {
-            1.0
-        }
-    };
-    let (imu_file, imu_fmt) = match sc.imu.output {
-        ImuOutput::Increments => ("imu.txt", "format = \"kf-gins\""),
-        ImuOutput::Rates => (
-            "imu.csv",
-            "format = \"csv\"\n\n[imu.csv]\nskip_lines = 1\ntime_col = 1\ngyro_cols = [2, 3, 4]\naccel_cols = [5, 6, 7]\nquantity = \"rate\"\nrate_sampling = \"interval_mean\"",
-        ),
-    };
-    let mut s = format!(
-        "# Written by `navfuse sim` for {}: run with `navfuse run run.toml --out DIR`.\n\
-         # Initial state = the truth at the start; IMU noise = the simulated grade ({}).\n\n\
-         [imu]\nfile = \"{imu_file}\"\nrate_hz = {}\n{imu_fmt}\n\n",
-        sc.path.display(),
-        grade.name,
-        sc.imu.rate_hz
-    );
-    if let Some(gs_) = &sc.file.gnss {
-        let l = gs_.antenna_lever_arm_m;
-        if let Some(fix) = &gs_.fix {
-            // The fix errors are Gauss-Markov with the reported std (gnss_sim.rs):
-            // the filter's shaping states with that correlation time, nearly all of
-            // the variance correlated.
-            let (tau, share) = if fix.corr_time_s > 0.0 {
-                (fix.corr_time_s, 0.95)
-            } else {
-                (0.0, 0.0)
-            };
-            s.push_str(&format!(
-                "[gnss]\nfile = \"gnss.txt\"\nformat = \"kf-gins\"\nlever_arm_m = [{}, {}, {}]\n\
-                 error_corr_time_s = {tau}\nerror_corr_fraction = {share}\n\n",
-                l[0], l[1], l[2]
-            ));
-        } else if gs_.raw {
-            // Raw observations only: tight coupling on them.
-            s.push_str(&format!(
-                "[gnss]\nfile = \"obs.rnx\"\nformat = \"rinex\"\nnav = \"nav.rnx\"\ncoupling = \"tight\"\n\
-                 range_rate = \"tdcp\"\nelevation_mask_deg = {}\nlever_arm_m = [{}, {}, {}]\n\n",
-                gs_.elevation_mask_deg, l[0], l[1], l[2]
-            ));
-        }
-        if let Some(h) = &gs_.heading {
-            let b = h.baseline_m;
-            s.push_str(&format!(
-                "[heading]\nfile = \"heading.txt\"\nbaseline_m = [{}, {}, {}]\n\n",
-                b[0], b[1], b[2]
-            ));
-        }
-    }
-    if let Some(o) = &sc.file.odometer {
-        let l = sc.file.vehicle.imu_to_reference_m;
-        s.push_str(&format!(
-            "[odometer]\nfile = \"odometer.txt\"\nformat = \"navfuse\"\nmeters_per_pulse = {}\n\n\
-             [vehicle]\nlever_arm_m = [{}, {}, {}]\nmounting_rpy_deg = [0, 0, 0]\nmounting_std_deg = 1\n\n",
-            o.meters_per_pulse, l[0], l[1], l[2]
-        ));
-    }
-    // The truth start; with raw measurements only (tight coupling) its uncertainty is
-    // what the pseudoranges can confirm, not 1 cm: with a 1 cm prior the first single
-    // point fix, 10-25 m off with broadcast errors, is a (correct) integrity alarm.
-    let raw_only = sc
-        .file
-        .gnss
-        .as_ref()
-        .is_some_and(|g| g.fix.is_none() && g.raw);
-    let (pos_std, vel_std) = if raw_only { (10.0, 0.1) } else { (0.01, 0.001) };
-    s.push_str(&format!(
-        "[time]\nstart = {t0}\n\n[initial]\nposition_deg_m = [{:.12}, {:.12}, {:.6}]\nvelocity_mps = [{:.9}, {:.9}, {:.9}]\nattitude_deg = [{:.9}, {:.9}, {:.9}]\n\
-         position_std_m = {pos_std}\nvelocity_std_mps = {vel_std}\nattitude_std_deg = 0.01\n\n\
-         [imu_noise]\narw_deg_sqrth = {arw}\nvrw_mps_sqrth = {vrw}\ngyro_bias_std_degph = {gb}\naccel_bias_std_mgal = {ab}\n\
-         gyro_scale_std_ppm = {gs}\naccel_scale_std_ppm = {asc}\ncorr_time_h = {tau_h}\n\n[output]\nimu_err = false\nstd = false\n",
-        s0.lla.x.to_degrees(),
-        s0.lla.y.to_degrees(),
-        s0.lla.z,
-        s0.v_n.x,
-        s0.v_n.y,
-        s0.v_n.z,
-        e.x.to_degrees(),
-        e.y.to_degrees(),
-        e.z.to_degrees()
-    ));
     let mut o = Out::create(dir, "run.toml", files)?;
-    o.put(s.as_bytes())?;
+    o.put(run_config_text(sc, dir).as_bytes())?;
     o.finish()
 }

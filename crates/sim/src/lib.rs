@@ -11,9 +11,11 @@
 //! - [`generate`]: one streaming pass that writes every output file.
 
 pub mod allan;
+pub mod baro_sim;
 pub mod generate;
 pub mod gnss_sim;
 pub mod imu_model;
 pub mod random;
+pub mod run_config;
 pub mod scenario;
 pub mod trajectory;

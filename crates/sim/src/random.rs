@@ -145,7 +145,7 @@ impl GaussMarkov {
         self.sigma
     }
 
-    /// Correlation time [s].
+    /// Correlation time \[s\].
     pub fn tau_s(&self) -> f64 {
         self.tau_s
     }

@@ -5,6 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use nalgebra::Vector3;
+use navfuse_core::time::SECONDS_PER_WEEK;
 use navfuse_io::error::InputError;
 use serde::Deserialize;
 
@@ -30,6 +31,9 @@ pub struct ScenarioFile {
     pub imu: Option<ImuSpec>,
     #[serde(default)]
     pub odometer: Option<OdometerSpec>,
+    /// Simulated barometer (baro_sim.rs).
+    #[serde(default)]
+    pub baro: Option<crate::baro_sim::BaroSpec>,
     #[serde(default)]
     pub gnss: Option<GnssSpec>,
     #[serde(default)]
@@ -43,7 +47,7 @@ pub struct StartSpec {
     pub gps_week: u32,
     /// GPS seconds of week at the start.
     pub time_s: f64,
-    /// Latitude [deg], longitude [deg], ellipsoidal height [m] of the IMU.
+    /// Latitude \[deg\], longitude \[deg\], ellipsoidal height \[m\] of the IMU.
     pub position_deg_m: [f64; 3],
     #[serde(default)]
     pub heading_deg: f64,
@@ -171,11 +175,11 @@ impl SegmentSpec {
 #[derive(Clone, Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct VehicleSpec {
-    /// IMU frame relative to the vehicle frame: roll, pitch, yaw [deg] (ZYX).
+    /// IMU frame relative to the vehicle frame: roll, pitch, yaw \[deg\] (ZYX).
     #[serde(default)]
     pub imu_mounting_deg: [f64; 3],
     /// Lever arm from the IMU to the vehicle reference point (odometer wheel /
-    /// rear-axle centre), IMU frame, forward-right-down [m].
+    /// rear-axle centre), IMU frame, forward-right-down \[m\].
     #[serde(default)]
     pub imu_to_reference_m: [f64; 3],
 }
@@ -185,17 +189,17 @@ pub struct VehicleSpec {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct OdometerSpec {
-    /// Output rate [Hz].
+    /// Output rate \[Hz\].
     #[serde(default = "default_odo_rate")]
     pub rate_hz: f64,
-    /// Nominal distance per pulse K_OD [m] (seed 004: 0.00324).
+    /// Nominal distance per pulse K_OD \[m\] (seed 004: 0.00324).
     #[serde(default = "default_k_od")]
     pub meters_per_pulse: f64,
     /// Pulses per wheel revolution (seed 004: 1024); informational (circumference =
     /// K_OD * pulses_per_rev), written to the summary.
     #[serde(default = "default_ppr")]
     pub pulses_per_rev: u32,
-    /// Scale-factor error dk [ppm]: true distance = (1 + dk) * K_OD * pulses.
+    /// Scale-factor error dk \[ppm\]: true distance = (1 + dk) * K_OD * pulses.
     #[serde(default)]
     pub scale_error_ppm: f64,
     /// White noise on the speed column [m/s] (the pulse count itself is exact).
@@ -216,7 +220,7 @@ fn default_ppr() -> u32 {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct OutputSpec {
-    /// Rate of truth.nav [Hz]; default = the IMU rate. Must divide the IMU rate.
+    /// Rate of truth.nav \[Hz\]; default = the IMU rate. Must divide the IMU rate.
     pub truth_rate_hz: Option<f64>,
     /// Also write the true IMU errors (truth_imu_err.txt) at the truth rate.
     #[serde(default = "yes")]
@@ -284,7 +288,7 @@ fn segment_line(text: &str, k: usize) -> Option<usize> {
         .map(|(i, _)| i + 1)
 }
 
-/// Longest scenario: 30 days [s].
+/// Longest scenario: 30 days \[s\].
 pub const MAX_DURATION_S: f64 = 30.0 * 86_400.0;
 /// Most IMU samples a scenario may generate: 30 days at 100 Hz.
 pub const MAX_IMU_SAMPLES: f64 = MAX_DURATION_S * 100.0;
@@ -330,7 +334,7 @@ impl Scenario {
                 ),
             ));
         }
-        if !(s.time_s.is_finite() && (0.0..604_800.0).contains(&s.time_s)) {
+        if !(s.time_s.is_finite() && (0.0..SECONDS_PER_WEEK).contains(&s.time_s)) {
             return Err(key_err(
                 path,
                 &text,

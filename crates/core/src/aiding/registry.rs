@@ -3,6 +3,7 @@
 //! measurement and run after each IMU step, and in which their state blocks are
 //! appended to the filter.
 
+use super::baro::Barometer;
 use super::gnss_loose::GnssLoose;
 use super::gnss_six_state::GnssSixState;
 use super::heading::DualAntennaHeading;
@@ -23,6 +24,7 @@ pub fn sources(cfg: &NavConfig, t0: f64) -> Vec<Box<dyn AidingSource>> {
     add(&mut list, TightGnss::from_config(cfg));
     add(&mut list, GnssLoose::from_config(cfg));
     add(&mut list, GnssSixState::from_config(cfg));
+    add(&mut list, Barometer::from_config(cfg));
     list
 }
 

@@ -337,7 +337,7 @@ impl Fuser<'_> {
 
 /// Chi-square gate for `dof` rows at tail probability `p`.
 pub fn chi2_gate(dof: usize, p: Option<f64>) -> Option<f64> {
-    p.map(|p| crate::filter::chi2_threshold(dof, p))
+    p.map(|p| crate::chi2::chi2_threshold(dof, p))
 }
 
 /// Measurements stacked into one (rows in order, block-diagonal R); None if empty.

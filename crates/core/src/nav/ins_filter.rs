@@ -497,6 +497,23 @@ impl InsFilter {
         }
     }
 
+    /// Final estimates of the `Block::Source` blocks.
+    pub(crate) fn source_states(&self) -> Vec<crate::events::SourceState> {
+        self.source_blocks
+            .iter()
+            .filter_map(|sb| match sb.block {
+                Block::Source { name, len } => Some(crate::events::SourceState {
+                    name,
+                    value: self.extra.as_slice()[sb.index..sb.index + len].to_vec(),
+                    std: (sb.index..sb.index + len)
+                        .map(|i| self.filter.std(i))
+                        .collect(),
+                }),
+                _ => None,
+            })
+            .collect()
+    }
+
     /// 1-sigma of the 21 INS states (six-state position/velocity when it runs).
     pub(crate) fn std21(&self) -> [f64; N_INS] {
         let mut s = [0.0; N_INS];

@@ -330,6 +330,7 @@ impl Navigator {
             s.odometer_scale = Some((ins.vehicle.odometer_scale, ins.filter.std(i)));
         }
         let mut summary = self.summary.clone();
+        summary.source_states = self.ins.source_states();
         for (src, status) in self.sources.iter().zip(self.status.iter_mut()) {
             let fuser = Fuser {
                 ins: &mut self.ins,

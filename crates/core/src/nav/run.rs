@@ -4,6 +4,8 @@
 use super::navigator::{NavError, Navigator};
 use super::start::find_start;
 use super::timeline::{effective_time, Inbox};
+use crate::aiding::registry;
+use crate::aiding::source::AidingSource;
 use crate::config::{GnssFusion, NavConfig};
 use crate::events::{Event, RunSummary};
 use crate::types::{ImuSample, Measurement};
@@ -20,6 +22,33 @@ use crate::types::{ImuSample, Measurement};
 /// data; with in-motion alignment the run starts at the aligning GNSS epoch.
 pub fn run<E: From<NavError>>(
     cfg: &NavConfig,
+    imu: impl Iterator<Item = Result<ImuSample, E>>,
+    measurements: &[Measurement],
+    output_period_s: Option<f64>,
+    on_output: impl FnMut(&Navigator) -> Result<(), E>,
+    on_progress: impl FnMut(f64),
+) -> Result<RunSummary, E> {
+    let none = |_: &NavConfig, _: f64| Vec::new();
+    run_with_sources(
+        cfg,
+        none,
+        imu,
+        measurements,
+        output_period_s,
+        on_output,
+        on_progress,
+    )
+}
+
+/// Your own aiding sources for [`run_with_sources`], made from the configuration and
+/// the start time (IMU time scale); they follow the registry's.
+pub type SourceFactory = fn(&NavConfig, f64) -> Vec<Box<dyn AidingSource>>;
+
+/// [`run`] with aiding sources of your own after the registry's (a custom source:
+/// `crates/app/examples/custom_source.rs`).
+pub fn run_with_sources<E: From<NavError>>(
+    cfg: &NavConfig,
+    extra_sources: impl FnOnce(&NavConfig, f64) -> Vec<Box<dyn AidingSource>>,
     imu: impl Iterator<Item = Result<ImuSample, E>>,
     measurements: &[Measurement],
     output_period_s: Option<f64>,
@@ -41,7 +70,9 @@ pub fn run<E: From<NavError>>(
     let Some(start) = find_start(cfg, first, &mut imu, measurements)? else {
         return Ok(RunSummary::default());
     };
-    let mut n = Navigator::with_velocity(cfg, start.t0, start.lla, start.rpy, start.v_n);
+    let mut sources = registry::sources(cfg, start.t0);
+    sources.extend(extra_sources(cfg, start.t0));
+    let mut n = Navigator::with_sources(cfg, start.t0, start.lla, start.rpy, start.v_n, sources);
     if matches!(cfg.gnss.fusion, GnssFusion::SixState { .. }) && !n.has_six_state() {
         return Err(NavError(format!(
             "six-state fusion: the initial position, velocity or their standard deviations are not finite (start at t = {:.3})",

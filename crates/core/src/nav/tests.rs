@@ -57,6 +57,7 @@ fn cfg() -> NavConfig {
         odometer: Default::default(),
         heading: Default::default(),
         zupt: Default::default(),
+        baro: Default::default(),
         tight: Default::default(),
         integrity: Default::default(),
         start_time: f64::NEG_INFINITY,

@@ -246,7 +246,7 @@ mod tests {
         let mut inbox = Inbox::new(&meas, &outages);
         let offset = 0.2;
         // Up to IMU time 1.1: the odometer at 1.0 and the fix at 1.0 + 0.2 is not due.
-        let mut due_at = |t_end: f64, inbox: &mut Inbox| {
+        let due_at = |t_end: f64, inbox: &mut Inbox| {
             let mut got = Vec::new();
             while let Some(d) = inbox.next_due(t_end, offset) {
                 got.push(match d {

@@ -1,0 +1,146 @@
+//! Barometer reader (docs/FORMATS.md "Barometer"): `t value` records, whitespace- or
+//! comma-separated, `#` / `%` comment lines, blank lines and a header line of names
+//! allowed. The value is a pressure in Pa or hPa (turned into a pressure altitude
+//! with the ISA relation against `reference_pressure_pa`, aiding/baro.rs) or a
+//! height in metres (a pressure altitude already, e.g. PX4's `baro_alt_meter`).
+//!
+//! Times are on the IMU time scale (the barometer is logged with the IMU), in the
+//! seconds-of-week convention of the IMU file; they must increase strictly. A sensor
+//! delay `delay_s` is removed from each time tag (the reading at t is the pressure at
+//! t - delay). The first bad record stops the read with an [`InputError`] naming
+//! file, line and field.
+
+use crate::error::InputError;
+use crate::fmt::{after_record, field, is_comment_line, parse_f64, split_fields, LineReader};
+use navfuse_core::aiding::baro::{pressure_altitude_m, BaroSample};
+use std::path::PathBuf;
+
+/// What the value column holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BaroQuantity {
+    PressurePa,
+    PressureHpa,
+    HeightM,
+}
+
+/// A barometer input (`\[baro\]`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct BaroSource {
+    pub path: PathBuf,
+    pub quantity: BaroQuantity,
+    /// Sea-level reference pressure of the pressure altitude \[Pa\] (QNH; the bias
+    /// state takes up what it leaves).
+    pub reference_pressure_pa: f64,
+    /// Sensor delay removed from the time tags \[s\].
+    pub delay_s: f64,
+}
+
+/// Read a barometer file into pressure altitudes; a last line cut mid-write (no line
+/// end) is dropped with a warning pushed to `warnings`.
+pub fn read_baro(
+    src: &BaroSource,
+    warnings: &mut Vec<String>,
+) -> Result<Vec<BaroSample>, InputError> {
+    let path = src.path.as_path();
+    let mut lines = LineReader::open(path)?;
+    let mut fields = Vec::with_capacity(4);
+    let mut out: Vec<BaroSample> = Vec::new();
+    let mut prev_t: Option<f64> = None;
+    let mut seen_record = false;
+    let mut warn = Some(warnings);
+    while let Some((ln, text)) = lines.next_line()? {
+        let mut record = || -> Result<(), InputError> {
+            split_fields(text, &mut fields);
+            if is_comment_line(text, &fields) {
+                return Ok(());
+            }
+            // A header line of names before the first record.
+            if !seen_record && parse_f64(field(text, &fields, 0)).is_none() {
+                return Ok(());
+            }
+            seen_record = true;
+            if fields.len() != 2 {
+                return Err(InputError::columns(
+                    path,
+                    ln,
+                    2,
+                    "t, pressure or height",
+                    fields.len(),
+                ));
+            }
+            let num = |k: usize, name: &str| -> Result<f64, InputError> {
+                let s = field(text, &fields, k);
+                match parse_f64(s) {
+                    Some(v) if v.is_finite() => Ok(v),
+                    Some(v) => Err(InputError::not_finite(path, ln, name, v)),
+                    None => Err(InputError::not_a_number(path, ln, name, s)),
+                }
+            };
+            let t = num(0, "t")? - src.delay_s;
+            if let Some(tp) = prev_t {
+                if t == tp {
+                    return Err(InputError::at_field(
+                        path,
+                        ln,
+                        "time",
+                        format!("duplicate record: time {t} repeats the previous record"),
+                    ));
+                }
+                if t < tp {
+                    return Err(InputError::backwards(path, ln, t, tp));
+                }
+            }
+            let v = num(1, "value")?;
+            let height_m = match src.quantity {
+                // -1 km .. 30 km: a pressure column read as heights is far outside.
+                BaroQuantity::HeightM if !(-1000.0..=30_000.0).contains(&v) => {
+                    let hint = if (10_000.0..=120_000.0).contains(&v) {
+                        " (a pressure in Pa? set quantity = \"pressure_pa\")"
+                    } else {
+                        ""
+                    };
+                    return Err(InputError::at_field(
+                        path,
+                        ln,
+                        "value",
+                        format!("expected a pressure altitude between -1000 and 30000 m, found {v} m{hint}"),
+                    ));
+                }
+                BaroQuantity::HeightM => v,
+                BaroQuantity::PressurePa | BaroQuantity::PressureHpa => {
+                    let p = if src.quantity == BaroQuantity::PressureHpa {
+                        v * 100.0
+                    } else {
+                        v
+                    };
+                    // 10 kPa .. 120 kPa: from above 15 km to below the Dead Sea.
+                    if !(10_000.0..=120_000.0).contains(&p) {
+                        let hint = if (10.0..=120.0).contains(&p) {
+                            " (a pressure in kPa? give Pa or hPa)"
+                        } else if (100.0..=1200.0).contains(&p) {
+                            " (a pressure in hPa? set quantity = \"pressure_hpa\")"
+                        } else {
+                            ""
+                        };
+                        return Err(InputError::at_field(
+                            path,
+                            ln,
+                            "value",
+                            format!("expected a pressure between 10000 and 120000 Pa, found {p} Pa{hint}"),
+                        ));
+                    }
+                    pressure_altitude_m(p, src.reference_pressure_pa)
+                }
+            };
+            prev_t = Some(t);
+            out.push(BaroSample { t, height_m });
+            Ok(())
+        };
+        let result = record();
+        if !after_record(result, ln, &mut lines, &mut warn)? {
+            break;
+        }
+    }
+    Ok(out)
+}

@@ -1,0 +1,131 @@
+//! The RINEX keys of `[gnss]` (`gnss.format = "rinex"`): navigation file, coupling,
+//! range rate, elevation mask, fault exclusion, DGPS (input::RinexGnss), and the
+//! `[gnss.tight]` table (tight.rs).
+
+use std::path::Path;
+
+use navfuse_core::config::TightOptions;
+
+use super::error::{kerr, KResult};
+use super::gnss::TGnss;
+use super::paths::{file_key, PathWriter};
+use super::tight;
+use super::units::{DEG, SAME};
+use super::validate::{opt_or, positive, v3};
+use crate::input::{Coupling, DgpsKind, DgpsSource, RinexGnss};
+
+/// Default `gnss.elevation_mask_deg`.
+pub const DEFAULT_ELEVATION_MASK_DEG: f64 = 10.0;
+/// Default `gnss.dgps_max_age_s`.
+pub const DEFAULT_DGPS_MAX_AGE_S: f64 = 30.0;
+
+/// `gnss.format = "rinex"`: navigation file, coupling, DGPS and `[gnss.tight]`.
+pub(super) fn convert(g: &TGnss, base: &Path) -> KResult<(RinexGnss, TightOptions)> {
+    let nav = g.nav.as_deref().ok_or_else(|| {
+        kerr(
+            "gnss.nav",
+            "gnss.format = \"rinex\" needs nav = \"RINEX navigation file\"",
+        )
+    })?;
+    let nav_path = file_key(base, "gnss.nav", nav)?;
+    // Tight coupling unless asked otherwise: raw observations are what it is for.
+    let coupling = g.coupling.unwrap_or(Coupling::Tight);
+    let elevation_mask_deg = g.elevation_mask_deg.unwrap_or(DEFAULT_ELEVATION_MASK_DEG);
+    if !(0.0..90.0).contains(&elevation_mask_deg) {
+        return Err(kerr(
+            "gnss.elevation_mask_deg",
+            format!("expected 0 <= mask < 90 deg, got {elevation_mask_deg}"),
+        ));
+    }
+    let max_age_s = opt_or(
+        "gnss.dgps_max_age_s",
+        g.dgps_max_age_s,
+        positive,
+        SAME,
+        DEFAULT_DGPS_MAX_AGE_S,
+    )?;
+    let dgps =
+        match (
+            g.dgps.unwrap_or(false),
+            &g.dgps_corrections,
+            &g.dgps_reference_obs,
+        ) {
+            (false, _, _) => None,
+            (true, Some(_), Some(_)) => {
+                return Err(kerr(
+                    "gnss.dgps_corrections",
+                    "give either dgps_corrections or dgps_reference_obs, not both",
+                ))
+            }
+            (true, Some(f), None) => Some(DgpsKind::Corrections(file_key(
+                base,
+                "gnss.dgps_corrections",
+                f,
+            )?)),
+            (true, None, Some(f)) => {
+                let key = "gnss.dgps_reference_position_deg_m";
+                let p = g.dgps_reference_position_deg_m.as_deref().ok_or_else(|| {
+                    kerr(
+                        key,
+                        "dgps_reference_obs needs the station's [lat_deg, lon_deg, h_m]",
+                    )
+                })?;
+                let p = v3(key, p)?;
+                Some(DgpsKind::ReferenceStation {
+                    obs_path: file_key(base, "gnss.dgps_reference_obs", f)?,
+                    position_lla: [DEG.si(p[0]), DEG.si(p[1]), p[2]],
+                })
+            }
+            (true, None, None) => return Err(kerr(
+                "gnss.dgps",
+                "dgps = true needs dgps_corrections = \"FILE\" or dgps_reference_obs = \"FILE\"",
+            )),
+        }
+        .map(|kind| DgpsSource { kind, max_age_s });
+    let mut t = TightOptions {
+        enabled: coupling == Coupling::Tight,
+        range_rate: g.range_rate.unwrap_or(TightOptions::default().range_rate),
+        ..TightOptions::default()
+    };
+    if let Some(x) = &g.tight {
+        tight::convert(x, &mut t)?;
+    }
+    Ok((
+        RinexGnss {
+            nav_path,
+            coupling,
+            elevation_mask_deg,
+            fde: g.fde.unwrap_or(true),
+            dgps,
+        },
+        t,
+    ))
+}
+
+/// The RINEX keys of `t` from `r` and `tight`.
+pub(super) fn to_toml(r: &RinexGnss, tight: &TightOptions, t: &mut TGnss, w: &PathWriter) {
+    t.nav = Some(w.path(&r.nav_path));
+    t.coupling = Some(r.coupling);
+    t.range_rate = Some(tight.range_rate);
+    t.elevation_mask_deg = Some(r.elevation_mask_deg);
+    t.fde = Some(r.fde);
+    t.dgps = Some(r.dgps.is_some());
+    if let Some(d) = &r.dgps {
+        t.dgps_max_age_s = Some(d.max_age_s);
+        match &d.kind {
+            DgpsKind::Corrections(p) => t.dgps_corrections = Some(w.path(p)),
+            DgpsKind::ReferenceStation {
+                obs_path,
+                position_lla,
+            } => {
+                t.dgps_reference_obs = Some(w.path(obs_path));
+                t.dgps_reference_position_deg_m = Some(vec![
+                    DEG.user(position_lla[0]),
+                    DEG.user(position_lla[1]),
+                    position_lla[2],
+                ]);
+            }
+        }
+    }
+    t.tight = Some(tight::to_toml(tight));
+}

@@ -1,0 +1,127 @@
+//! RINEX observation files, GPS L1 C/A only: pseudorange (m), carrier phase (cycles)
+//! with its loss-of-lock indicator, Doppler (Hz) and C/N0 (dB-Hz).
+//!
+//! Writer: [`RinexObsWriter`] produces a GPS-only RINEX 3.04 file (§5.2 header, §5.3
+//! epoch records: F14.3 value, LLI digit, SSI digit per observation; blank fields when
+//! absent) with C1C, L1C, D1C, S1C.
+//!
+//! Readers: [`read_rinex_obs`] takes the version from `RINEX VERSION / TYPE` and reads
+//! RINEX 2.10/2.11 (any 2.xx) and 3.0x files of any system mix; [`read_rinex3_obs`]
+//! reads 3.0x only. Both give the same [`ObsEpoch`]s for the same content. Other
+//! systems' satellites and other observation types are skipped; epochs with flag 0
+//! (OK) or 1 (power failure since the previous epoch) are kept, flags 2-5 (events,
+//! with the header/comment records they announce) and 6 (cycle-slip records) are
+//! skipped.
+//!
+//! - 3.0x: C1C, L1C, D1C, S1C, found by their position in the GPS `SYS / # / OBS
+//!   TYPES` list; one line per satellite (`G05` + 16 columns per observation).
+//! - 2.xx: C1, L1, D1, S1, found by their position in `# / TYPES OF OBSERV` (`I6`
+//!   count, 9 types per line, continuation lines with a blank count). P1 is never used
+//!   for the pseudorange: it is the P(Y) code, which differs from C/A by the P1-C1
+//!   code bias, so a file with P1 but no C1 gives no pseudoranges. Epoch line
+//!   ` yy mm dd hh mm ss.sssssss  f nnn` + 12 satellites (`A1,I2`; a blank system is
+//!   GPS) + receiver clock offset (F12.9, columns 69-80); more than 12 satellites
+//!   continue on lines starting with 32 blanks. Two-digit years 80-99 are 1980-1999,
+//!   00-79 are 2000-2079. Each satellite has ceil(types / 5) lines of 5 fields
+//!   (F14.3, LLI, SSI); trailing blanks may be missing. An event with flag 3 or 4 may
+//!   carry a new `# / TYPES OF OBSERV` list, which applies from the next epoch on.
+//!   Flag 6 skips the satellite list and one observation record per satellite.
+//! - The LLI digit of L1/L1C is kept as written: in 2.xx bit 1 means "opposite
+//!   wavelength factor" and bit 2 "under anti-spoofing", in 3.0x bit 1 is a
+//!   half-cycle ambiguity and bit 2 BOC tracking; bit 0 (lost lock) is the same. SSI
+//!   digits are not read; S1 is taken as dB-Hz (RINEX 2 leaves the unit to the
+//!   receiver).
+//! - Errors name the file, the line and the field and say what was expected
+//!   (`obs.11o:14: field 'G05 C1': expected a number, found "2057x396.770"`); truncated
+//!   lines read as blank fields, a truncated record is an error at its epoch line.
+//!   Hatanaka-compressed (CRINEX) files are refused with a hint.
+
+use self::fields::{open_obs, unsupported};
+use self::v2::read_v2_body;
+use self::v3::read_v3_body;
+use crate::error::InputError;
+use std::path::Path;
+
+mod fields;
+#[cfg(test)]
+mod tests;
+mod v2;
+mod v3;
+mod writer;
+
+pub use writer::{ssi_from_cn0, ObsHeader, RinexObsWriter};
+
+pub use navfuse_gnss::obs::{ObsEpoch, SatObs};
+
+/// Read the GPS L1 C/A observations of a RINEX 2.10/2.11 or 3.0x observation file;
+/// the version is taken from the `RINEX VERSION / TYPE` line. See the module
+/// documentation for what is kept and skipped.
+/// Warnings (a damaged last epoch dropped) are left out: see [`read_rinex_obs_report`].
+pub fn read_rinex_obs(path: &Path) -> Result<Vec<ObsEpoch>, InputError> {
+    read_rinex_obs_report(path).map(|r| r.epochs)
+}
+
+/// What an observation file gave.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RinexObsRead {
+    pub epochs: Vec<ObsEpoch>,
+    /// Findings that did not stop the read: a damaged last epoch dropped.
+    pub warnings: Vec<String>,
+}
+
+/// [`read_rinex_obs`] with its warnings. A last epoch cut by the end of the file (a
+/// log cut mid-write) is dropped with a warning; damage elsewhere is an error.
+pub fn read_rinex_obs_report(path: &Path) -> Result<RinexObsRead, InputError> {
+    let (mut rd, ln, version) = open_obs(path)?;
+    let body = if version.floor() == 2.0 {
+        read_v2_body
+    } else if version.floor() == 3.0 {
+        read_v3_body
+    } else {
+        return Err(unsupported(path, ln, version, "2.10, 2.11 and 3.0x are"));
+    };
+    let mut out = RinexObsRead {
+        epochs: Vec::new(),
+        warnings: Vec::new(),
+    };
+    let mut records = false;
+    match body(&mut rd, path, &mut out.epochs, &mut records) {
+        Ok(()) => {}
+        Err(e) if records && rd.cut_last_line() => out.warnings.push(e.last_line_warning()),
+        Err(e) => return Err(e),
+    }
+    for (k, w) in out.epochs.windows(2).enumerate() {
+        if w[1].t.diff_s(&w[0].t) < 0.0 {
+            return Err(InputError::new(
+                path,
+                format!(
+                    "epoch {} (week {} {} s) goes backwards (previous {} s): expected \
+                     non-decreasing epoch times",
+                    k + 2,
+                    w[1].t.week,
+                    w[1].t.sow,
+                    w[0].t.sow
+                ),
+            )
+            .with_field("epoch time"));
+        }
+    }
+    Ok(out)
+}
+
+/// Read the GPS C1C/L1C/D1C/S1C observations of a RINEX 3.0x observation file. Other
+/// versions are refused; [`read_rinex_obs`] also reads RINEX 2.10/2.11.
+pub fn read_rinex3_obs(path: &Path) -> Result<Vec<ObsEpoch>, InputError> {
+    let (mut rd, ln, version) = open_obs(path)?;
+    if version.floor() != 3.0 {
+        return Err(unsupported(
+            path,
+            ln,
+            version,
+            "3.0x is; read_rinex_obs also reads 2.10/2.11",
+        ));
+    }
+    let mut out = Vec::new();
+    read_v3_body(&mut rd, path, &mut out, &mut false)?;
+    Ok(out)
+}
