@@ -21,13 +21,13 @@ use std::process::ExitCode;
     version,
     about = "GNSS/INS integrated navigation: strapdown INS + error-state EKF with GNSS aiding",
     long_about = "GNSS/INS integrated navigation: strapdown INS (NED, WGS-84, coning/sculling) with a \
-closed-loop error-state EKF (21 states, plus odometer scale, mounting, receiver clock and time-offset states as configured). Aiding: \
+closed-loop error-state EKF (21 states, plus odometer scale, mounting, receiver clock, GNSS fix error, barometer bias and time-offset states as configured). Aiding: \
 loosely coupled GNSS position/velocity; tightly coupled pseudoranges with Doppler or time-differenced \
 carrier phase (RINEX 3, broadcast ephemeris, DGPS corrections); heading from course over ground or \
-a dual antenna; odometer, non-holonomic constraint, zero velocity; a GNSS integrity monitor against \
+a dual antenna; odometer, non-holonomic constraint, zero velocity; barometric altitude; a GNSS integrity monitor against \
 spoofing with dead-reckoning fallback.\n\n\
 Inputs: KF-GINS text files, CSV IMU logs, the rtklibexplorer raw IMU log, RTKLIB .pos solutions, RINEX 3 \
-observation and navigation files, odometer and heading logs, DGPS corrections. \
+observation and navigation files, odometer, heading and barometer logs, DGPS corrections. \
 Outputs: KF-GINS .nav / IMU_ERR / STD files, CSV, events and integrity logs. Formats: docs/FORMATS.md; \
 configuration keys: docs/CONFIG.md."
 )]
@@ -104,15 +104,16 @@ enum Command {
         json: bool,
     },
     /// Simulate a scenario (docs/SIMULATOR.md): truth, IMU, odometer, GNSS raw
-    /// measurements (RINEX 3), receiver fixes, dual-antenna heading, DGPS corrections.
+    /// measurements (RINEX 3), receiver fixes, dual-antenna heading, DGPS corrections,
+    /// barometer.
     ///
     /// Writes into DIR: truth.nav, imu.txt (or imu.csv), truth_imu_err.txt, and as the
     /// scenario asks odometer.txt, gnss.txt, heading.txt, obs.rnx, nav.rnx, dgps.csv,
-    /// gnss_errors.csv, events.csv; plus run.toml (a navfuse run configuration for these
+    /// gnss_errors.csv, events.csv, baro.txt, baro_truth.txt; plus run.toml (a navfuse run configuration for these
     /// files), scenario.toml (a copy) and sim_summary.json. Same scenario and seed give
     /// byte-identical files.
     Sim {
-        /// Scenario file (TOML), e.g. scenarios/car_urban.toml.
+        /// Scenario file (TOML), e.g. scenarios/seed002_car.toml.
         scenario: PathBuf,
         /// Output directory (created if missing).
         #[arg(long, value_name = "DIR")]

@@ -34,7 +34,7 @@ impl Unit {
     }
 
     /// An SI value in this unit, as written: the value rounded to 15 significant
-    /// digits ([`tidy`]: 0.027 deg/h, not 0.026999999999999996) when that loads back
+    /// digits (`tidy`: 0.027 deg/h, not 0.026999999999999996) when that loads back
     /// to `si` exactly, otherwise the shortest nearby value that does (up to 16
     /// steps of the last bit away), so that writing and loading changes nothing.
     /// When no value loads back exactly, the rounded one.
