@@ -3,7 +3,7 @@
 //! (REFERENCES \[SYS\] §3a, §3c; models in gnss_position.rs, gnss_velocity.rs,
 //! heading.rs).
 //!
-//! Policy (docs/ALGORITHMS.md "Loose coupling"): the time-correlated share of each
+//! Policy (docs/ALGORITHMS.md "GNSS aiding", "GNSS fix errors"): the time-correlated share of each
 //! fix's error is a Gauss-Markov block (`GnssBias`, fix_error.rs); each row is tested
 //! on NIS / the robust innovation scale, never rejected within what the INS can have
 //! drifted (the floor), IGG-III down-weighted beyond; rejected fixes that agree with

@@ -1,7 +1,7 @@
 //! The time line: which measurement is due when, and how an IMU interval is cut at
 //! the measurement times inside it so that each increment is integrated exactly once.
 //!
-//! Rules (docs/ALGORITHMS.md, "Time line"):
+//! Rules (docs/ALGORITHMS.md, "Order of updates and the time line"):
 //! - A measurement is applied when the navigator has reached its time of validity:
 //!   the IMU interval (t_k - dt, t_k] holding it is integrated up to that time, the
 //!   measurement is applied, and integration continues from there.
