@@ -78,19 +78,7 @@ pub fn read_baro(
                 }
             };
             let t = num(0, "t")? - src.delay_s;
-            if let Some(tp) = prev_t {
-                if t == tp {
-                    return Err(InputError::at_field(
-                        path,
-                        ln,
-                        "time",
-                        format!("duplicate record: time {t} repeats the previous record"),
-                    ));
-                }
-                if t < tp {
-                    return Err(InputError::backwards(path, ln, t, tp));
-                }
-            }
+            InputError::check_time_order(path, ln, t, prev_t)?;
             let v = num(1, "value")?;
             let height_m = match src.quantity {
                 // -1 km .. 30 km: a pressure column read as heights is far outside.

@@ -119,6 +119,26 @@ impl InputError {
         )
     }
 
+    /// A record's time `t` after the previous record's: a duplicate or a time going
+    /// backwards is an error naming the line and the field `time`.
+    pub fn check_time_order(
+        path: &Path,
+        line: usize,
+        t: f64,
+        previous: Option<f64>,
+    ) -> Result<(), Self> {
+        match previous {
+            Some(p) if t == p => Err(InputError::at_field(
+                path,
+                line,
+                "time",
+                format!("duplicate record: time {t} repeats the previous record"),
+            )),
+            Some(p) if t < p => Err(InputError::backwards(path, line, t, p)),
+            _ => Ok(()),
+        }
+    }
+
     /// `std must be > 0, found V`.
     pub fn std_not_positive(path: &Path, line: usize, field: &str, value: f64) -> Self {
         InputError::at_field(path, line, field, format!("std must be > 0, found {value}"))

@@ -59,18 +59,7 @@ fn read(
                 }
             };
             let t = num(0, "t")?;
-            match prev {
-                Some(p) if t == p => {
-                    return Err(InputError::at_field(
-                        path,
-                        ln,
-                        "time",
-                        format!("duplicate record: time {t} repeats the previous record"),
-                    ))
-                }
-                Some(p) if t < p => return Err(InputError::backwards(path, ln, t, p)),
-                _ => {}
-            }
+            InputError::check_time_order(path, ln, t, prev)?;
             prev = Some(t);
             let heading = num(1, "heading")?;
             if !(heading > -180.0 && heading < 360.0) {

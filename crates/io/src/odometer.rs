@@ -83,18 +83,8 @@ fn read(
                 }
             };
             let t = num(0, "t")?;
+            InputError::check_time_order(path, ln, t, prev.map(|p| p.0))?;
             if let Some((tp, _)) = prev {
-                if t == tp {
-                    return Err(InputError::at_field(
-                        path,
-                        ln,
-                        "time",
-                        format!("duplicate record: time {t} repeats the previous record"),
-                    ));
-                }
-                if t < tp {
-                    return Err(InputError::backwards(path, ln, t, tp));
-                }
                 if !(t - tp).is_finite() {
                     return Err(InputError::at_field(
                         path,
