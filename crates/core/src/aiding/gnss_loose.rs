@@ -90,7 +90,12 @@ impl GnssLoose {
         floor: f64,
     ) -> (Fused, Option<f64>, Option<DVector<f64>>, f64) {
         f.flush_covariance();
-        let Some(mut lin) = aiding.linearize(&f.context(ReceiverClock::default())) else {
+        let mut ctx = f.context(ReceiverClock::default());
+        // The fix-error states are this source's (module doc).
+        if let [n, e, d] = *f.extra(Block::GnssBias) {
+            ctx.gnss_bias_ned_m = Vector3::new(n, e, d);
+        }
+        let Some(mut lin) = aiding.linearize(&ctx) else {
             return (Fused::NotApplicable, None, None, 0.0);
         };
         lin.r *= r_share;

@@ -397,9 +397,9 @@ impl InsFilter {
     }
 
     /// What the aiding models see of the current solution, with the receiver clock
-    /// `clock` (tight coupling; zero for the other sources).
+    /// `clock` (tight coupling; zero for the other sources). The fix-error estimate is
+    /// zero here: the loose source, which owns it, puts it in its own context.
     pub(crate) fn context(&self, clock: ReceiverClock) -> AidingContext<'_> {
-        let b = self.extra(Block::GnssBias);
         AidingContext {
             nav: &self.nav,
             layout: &self.layout,
@@ -408,11 +408,7 @@ impl InsFilter {
             lever_arm_b: self.cfg.gnss.lever_arm_b,
             vehicle: self.vehicle,
             clock,
-            gnss_bias_ned_m: if b.len() == 3 {
-                Vector3::new(b[0], b[1], b[2])
-            } else {
-                Vector3::zeros()
-            },
+            gnss_bias_ned_m: Vector3::zeros(),
         }
     }
 
