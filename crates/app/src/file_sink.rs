@@ -8,11 +8,12 @@
 //! (or, when the run stops cleanly, at the same epoch).
 
 use crate::error::{Error, ResultExt};
-use crate::sink::{OutputLayout, SolutionSink};
+use crate::sink::{OutputLayout, SmoothedEpoch, SmoothedLayout, SolutionSink};
 use crate::summary::JobResult;
 use navfuse_io::nav::{
     CsvWriter, ImuErrWriter, NavWriter, RecordWriter, SolutionRecord, StdWriter,
 };
+use navfuse_io::smoothed::{SeparationRow, SeparationWriter, StatesWriter};
 use navfuse_io::InputError;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -25,18 +26,81 @@ const BATCH: usize = 2048;
 /// Writes a run's output into a directory, as `navfuse run --out DIR` does.
 pub struct FileSink {
     dir: PathBuf,
+    main: Threaded,
+    smoothed: Threaded,
+    states: Option<StatesWriter>,
+    separation: Option<SeparationWriter>,
+}
+
+/// Record writers on their own thread, fed in batches.
+#[derive(Default)]
+struct Threaded {
     batch: Vec<SolutionRecord>,
     tx: Option<SyncSender<Vec<SolutionRecord>>>,
     writer: Option<JoinHandle<Result<(), InputError>>>,
 }
 
+impl Threaded {
+    fn start(writers: Vec<Box<dyn RecordWriter>>) -> Self {
+        let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<SolutionRecord>>(8);
+        Threaded {
+            batch: Vec::with_capacity(BATCH),
+            tx: Some(tx),
+            writer: Some(std::thread::spawn(move || write_batches(writers, rx))),
+        }
+    }
+
+    fn push(&mut self, record: &SolutionRecord) -> Result<(), Error> {
+        self.batch.push(*record);
+        if self.batch.len() == BATCH {
+            self.send()?;
+        }
+        Ok(())
+    }
+
+    /// Hand the current batch to the writer thread.
+    fn send(&mut self) -> Result<(), Error> {
+        let full = std::mem::replace(&mut self.batch, Vec::with_capacity(BATCH));
+        match &self.tx {
+            Some(tx) => tx
+                .send(full)
+                .map_err(|_| Error::Other("the output writer stopped".into())),
+            None => Ok(()),
+        }
+    }
+
+    /// Send the rest, wait for the writer; its error first (the real cause when the
+    /// run stopped on it).
+    fn end(&mut self, dir: &Path) -> Result<(), Error> {
+        let sent = if self.batch.is_empty() {
+            Ok(())
+        } else {
+            self.send()
+        };
+        self.tx = None;
+        let Some(writer) = self.writer.take() else {
+            return sent;
+        };
+        let written = writer
+            .join()
+            .map_err(|_| Error::Other("the output writer panicked".into()))?;
+        written.with_context(|| {
+            format!(
+                "writing the solution into {} (the files hold whole records up to where writing stopped)",
+                dir.display()
+            )
+        })?;
+        sent
+    }
+}
+
 impl FileSink {
     /// Prepare `dir` (created if missing): leftovers of an earlier run (events.log,
-    /// summary.json, integrity.csv) are removed and summary.json is reserved, saying
-    /// `"status": "running"` until the run ends.
+    /// summary.json, integrity.csv, the smoothed files) are removed and summary.json
+    /// is reserved, saying `"status": "running"` until the run ends.
     pub fn create(dir: &Path) -> Result<Self, Error> {
         // Leftovers of an earlier run in the same directory must not sit beside this one's.
-        for stale in ["events.log", "summary.json", "integrity.csv"] {
+        for stale in STALE {
             let _ = std::fs::remove_file(dir.join(stale));
         }
         std::fs::create_dir_all(dir).map_err(|e| {
@@ -50,9 +114,10 @@ impl FileSink {
             .map_err(|e| Error::io(format!("cannot write {}", sum_path.display()), e))?;
         Ok(FileSink {
             dir: dir.to_path_buf(),
-            batch: Vec::new(),
-            tx: None,
-            writer: None,
+            main: Threaded::default(),
+            smoothed: Threaded::default(),
+            states: None,
+            separation: None,
         })
     }
 
@@ -60,42 +125,56 @@ impl FileSink {
     pub fn dir(&self) -> &Path {
         &self.dir
     }
+}
 
-    /// Hand the current batch to the writer thread.
-    fn send(&mut self) -> Result<(), Error> {
-        let full = std::mem::replace(&mut self.batch, Vec::with_capacity(BATCH));
-        match &self.tx {
-            Some(tx) => tx
-                .send(full)
-                .map_err(|_| Error::Other("the output writer stopped".into())),
-            None => Ok(()),
-        }
+/// Files of an earlier run that this run may not write.
+const STALE: [&str; 9] = [
+    "events.log",
+    "summary.json",
+    "integrity.csv",
+    "smoothed.nav",
+    "smoothed_imu_err.txt",
+    "smoothed_std.txt",
+    "smoothed.csv",
+    "smoothed_states.csv",
+    "separation.csv",
+];
+
+/// The record writers of one solution: `STEM.nav`, then as `layout` says
+/// `STEM_imu_err.txt` (`imu_err.txt` for the forward one), `STEM_std.txt`, `STEM.csv`.
+fn record_writers(
+    dir: &Path,
+    stem: &str,
+    layout: &OutputLayout,
+    files: &mut Vec<PathBuf>,
+) -> Result<Vec<Box<dyn RecordWriter>>, Error> {
+    let name = |suffix: &str| match stem {
+        "solution" => dir.join(suffix.trim_start_matches('_')),
+        _ => dir.join(format!("{stem}{suffix}")),
+    };
+    files.push(dir.join(format!("{stem}.nav")));
+    let mut writers: Vec<Box<dyn RecordWriter>> =
+        vec![Box::new(NavWriter::create(files.last().unwrap())?)];
+    if layout.imu_err {
+        files.push(name("_imu_err.txt"));
+        writers.push(Box::new(ImuErrWriter::create(files.last().unwrap())?));
     }
+    if layout.std {
+        files.push(name("_std.txt"));
+        writers.push(Box::new(StdWriter::create(files.last().unwrap())?));
+    }
+    // With the integrity monitor, the CSV carries its flag column.
+    if layout.csv || layout.integrity {
+        files.push(dir.join(format!("{stem}.csv")));
+        let w = CsvWriter::create(files.last().unwrap(), layout.std, layout.integrity);
+        writers.push(Box::new(w?));
+    }
+    Ok(writers)
 }
 
 impl SolutionSink for FileSink {
     fn begin(&mut self, layout: &OutputLayout, files: &mut Vec<PathBuf>) -> Result<(), Error> {
-        files.push(self.dir.join("solution.nav"));
-        let mut writers: Vec<Box<dyn RecordWriter>> =
-            vec![Box::new(NavWriter::create(files.last().unwrap())?)];
-        if layout.imu_err {
-            files.push(self.dir.join("imu_err.txt"));
-            writers.push(Box::new(ImuErrWriter::create(files.last().unwrap())?));
-        }
-        if layout.std {
-            files.push(self.dir.join("std.txt"));
-            writers.push(Box::new(StdWriter::create(files.last().unwrap())?));
-        }
-        // With the integrity monitor, solution.csv carries its flag column.
-        if layout.csv || layout.integrity {
-            files.push(self.dir.join("solution.csv"));
-            let w = CsvWriter::create(files.last().unwrap(), layout.std, layout.integrity);
-            writers.push(Box::new(w?));
-        }
-        let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<SolutionRecord>>(8);
-        self.writer = Some(std::thread::spawn(move || write_batches(writers, rx)));
-        self.tx = Some(tx);
-        self.batch = Vec::with_capacity(BATCH);
+        self.main = Threaded::start(record_writers(&self.dir, "solution", layout, files)?);
         Ok(())
     }
 
@@ -104,34 +183,61 @@ impl SolutionSink for FileSink {
     }
 
     fn epoch(&mut self, record: &SolutionRecord) -> Result<(), Error> {
-        self.batch.push(*record);
-        if self.batch.len() == BATCH {
-            self.send()?;
+        self.main.push(record)
+    }
+
+    fn end(&mut self) -> Result<(), Error> {
+        self.main.end(&self.dir)
+    }
+
+    fn begin_smoothed(
+        &mut self,
+        layout: &SmoothedLayout,
+        files: &mut Vec<PathBuf>,
+    ) -> Result<(), Error> {
+        // The smoothed CSV always: it is what users plot.
+        let base = OutputLayout {
+            csv: true,
+            ..layout.base
+        };
+        self.smoothed = Threaded::start(record_writers(&self.dir, "smoothed", &base, files)?);
+        if !layout.state_names.is_empty() {
+            files.push(self.dir.join("smoothed_states.csv"));
+            let p = files.last().unwrap();
+            self.states = Some(StatesWriter::create(p, &layout.state_names)?);
+        }
+        files.push(self.dir.join("separation.csv"));
+        self.separation = Some(SeparationWriter::create(files.last().unwrap())?);
+        Ok(())
+    }
+
+    fn smoothed(&mut self, epoch: &SmoothedEpoch) -> Result<(), Error> {
+        self.smoothed.push(&epoch.record)?;
+        if let Some(w) = self.states.as_mut() {
+            let r = &epoch.record;
+            w.write(r.gps_week, r.nav.t, &epoch.states, &epoch.states_std)?;
         }
         Ok(())
     }
 
-    fn end(&mut self) -> Result<(), Error> {
-        let sent = if self.batch.is_empty() {
-            Ok(())
-        } else {
-            self.send()
-        };
-        self.tx = None;
-        let Some(writer) = self.writer.take() else {
-            return sent;
-        };
-        let written = writer
-            .join()
-            .map_err(|_| Error::Other("the output writer panicked".into()))?;
-        // A failed writer (disk full, ...) is the real cause when the run stopped on it.
-        written.with_context(|| {
-            format!(
-                "writing the solution into {} (the files hold whole records up to where writing stopped)",
-                self.dir.display()
-            )
-        })?;
-        sent
+    fn separation(&mut self, row: &SeparationRow) -> Result<(), Error> {
+        match self.separation.as_mut() {
+            Some(w) => Ok(w.write(row)?),
+            None => Ok(()),
+        }
+    }
+
+    fn end_smoothed(&mut self) -> Result<(), Error> {
+        let records = self.smoothed.end(&self.dir);
+        let states = self.states.take().map_or(Ok(()), |w| w.finish());
+        let sep = self.separation.take().map_or(Ok(()), |w| w.finish());
+        records?;
+        states?;
+        Ok(sep?)
+    }
+
+    fn scratch_dir(&self) -> Option<PathBuf> {
+        Some(self.dir.clone())
     }
 
     fn report(&mut self, job: &mut JobResult, progress: bool) -> Result<(), Error> {

@@ -7,6 +7,7 @@ use crate::error::{Error, ResultExt};
 use crate::inputs::{self, split_week};
 use crate::plausibility::{self, Span};
 use crate::sink::{OutputLayout, SolutionSink};
+use crate::smooth::ForwardLog;
 use crate::stop::Interrupted;
 use crate::summary::JobResult;
 use crate::{time_offset, RunOptions};
@@ -113,6 +114,16 @@ pub(crate) fn navigate(
     };
     job.integrity_table = monitor_on;
     sink.begin(&layout, &mut job.files)?;
+    // The smoother's scratch files: beside the output (a temporary directory may be
+    // in memory).
+    let log = match cfg.smoother.enabled {
+        true => {
+            let dir = sink.scratch_dir().unwrap_or_else(std::env::temp_dir);
+            Some(ForwardLog::create(&dir, &cfg.smoother, week)?)
+        }
+        false => None,
+    };
+    let log = std::cell::RefCell::new(log);
 
     let t_end = cfg.nav.end_time.or(last_gnss_t).unwrap_or(run_start);
     let bar = (opts.progress && t_end > run_start).then(|| {
@@ -130,18 +141,22 @@ pub(crate) fn navigate(
     let started = std::cell::Cell::new(false);
     let mut stopped: Option<RunSummary> = None;
     let mut last_out_t = None;
-    let result = navfuse_core::run_with_sources(
+    let mut on_record = |r: navfuse_core::smoother::RtsRecord| match log.borrow_mut().as_mut() {
+        Some(l) => l.record(r),
+        None => Ok(()),
+    };
+    let result = navfuse_core::run_recording(
         &cfg.nav,
         |c: &navfuse_core::config::NavConfig, t0| {
             opts.extra_sources.map_or_else(Vec::new, |f| f(c, t0))
         },
         std::iter::once(Ok(first)).chain(reader.by_ref().map(|r| {
             let r = r.map_err(Error::from);
-            if started.get() {
-                r
-            } else {
-                opts.stop_check(r)
+            let r = if started.get() { r } else { opts.stop_check(r) };
+            if let (Ok(s), Some(l)) = (&r, log.borrow_mut().as_mut()) {
+                l.imu(s)?;
             }
+            r
         })),
         &measurements,
         cfg.output.rate_hz.map(|r| 1.0 / r),
@@ -165,6 +180,9 @@ pub(crate) fn navigate(
                 gnss_integrity: monitor_on.then(|| n.integrity_state().flag()),
             };
             last_out_t = Some(n.time_gnss());
+            if let Some(l) = log.borrow_mut().as_mut() {
+                l.epoch(n, rec.gnss_integrity)?;
+            }
             if let Err(e) = sink.epoch(&rec) {
                 stopped = Some(n.summary().clone());
                 return Err(e);
@@ -176,6 +194,10 @@ pub(crate) fn navigate(
                 b.set_position(((t - run_start) * 10.0).max(0.0) as u64);
                 b.set_message(format!("t = {t:.1}"));
             }
+        },
+        match cfg.smoother.enabled {
+            true => Some(&mut on_record),
+            false => None,
         },
     );
     if let Some(b) = &bar {
@@ -213,6 +235,10 @@ pub(crate) fn navigate(
             sink.location()
         )
     })?;
+    if let Some(l) = log.into_inner() {
+        let rep = l.smooth(&layout, sink, opts.progress, job)?;
+        job.smoother = Some(rep);
+    }
     if opts.progress {
         for n in &job.notes {
             eprintln!("navfuse: note: {n}");

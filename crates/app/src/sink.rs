@@ -8,6 +8,7 @@ use crate::error::Error;
 use crate::summary::JobResult;
 use navfuse_core::Event;
 use navfuse_io::nav::SolutionRecord;
+use navfuse_io::smoothed::SeparationRow;
 use std::path::PathBuf;
 
 /// What the records of a run carry and which solution tables a file sink writes
@@ -25,11 +26,34 @@ pub struct OutputLayout {
     pub integrity: bool,
 }
 
+/// What the smoothed output holds (when `[smoother]` is on).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SmoothedLayout {
+    /// As the forward output's.
+    pub base: OutputLayout,
+    /// `"rts"` or `"combined"`.
+    pub mode: &'static str,
+    /// The filter states beyond the 21 INS ones (`smoothed_states.csv` columns).
+    pub state_names: Vec<String>,
+}
+
+/// One smoothed output epoch: the record (smoothed solution, IMU errors and 1-sigma)
+/// and the extra states with their 1-sigma, in [`SmoothedLayout::state_names`] order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SmoothedEpoch {
+    pub record: SolutionRecord,
+    pub states: Vec<f64>,
+    pub states_std: Vec<f64>,
+}
+
 /// Receives a run's output. Calls, in order: [`begin`](Self::begin) once the inputs
 /// are read and checked (not at all when the run is refused before), then
 /// [`epoch`](Self::epoch) per output epoch, [`end`](Self::end) after the last one
-/// (also when the run stopped early), and [`report`](Self::report) once the run has
-/// ended, however it ended (also after a failure before `begin`).
+/// (also when the run stopped early); when smoothing, after a completed forward run,
+/// [`begin_smoothed`](Self::begin_smoothed), [`smoothed`](Self::smoothed) per
+/// output epoch with [`separation`](Self::separation) rows in between, and
+/// [`end_smoothed`](Self::end_smoothed); and [`report`](Self::report) once the run
+/// has ended, however it ended (also after a failure before `begin`).
 pub trait SolutionSink {
     /// Get ready for records laid out as `layout`; push the paths of the files this
     /// sink will write onto `files` (they appear in the summary).
@@ -46,6 +70,39 @@ pub trait SolutionSink {
     /// After the last epoch: everything handed on. Called only after `begin`.
     fn end(&mut self) -> Result<(), Error> {
         Ok(())
+    }
+
+    /// Get ready for the smoothed solution; push the paths of the files it goes to.
+    fn begin_smoothed(
+        &mut self,
+        layout: &SmoothedLayout,
+        files: &mut Vec<PathBuf>,
+    ) -> Result<(), Error> {
+        let _ = (layout, files);
+        Ok(())
+    }
+
+    /// One smoothed output epoch, in time order.
+    fn smoothed(&mut self, epoch: &SmoothedEpoch) -> Result<(), Error> {
+        let _ = epoch;
+        Ok(())
+    }
+
+    /// One row of the separation report.
+    fn separation(&mut self, row: &SeparationRow) -> Result<(), Error> {
+        let _ = row;
+        Ok(())
+    }
+
+    /// After the last smoothed epoch (also when smoothing failed half-way).
+    fn end_smoothed(&mut self) -> Result<(), Error> {
+        Ok(())
+    }
+
+    /// A scratch directory for the smoother's disk-backed store (None: the system's
+    /// temporary directory).
+    fn scratch_dir(&self) -> Option<PathBuf> {
+        None
     }
 
     /// The finished run (status, error, findings, notes, `summary.events`); a sink
@@ -66,6 +123,12 @@ pub struct MemorySink {
     pub records: Vec<SolutionRecord>,
     /// The run's events (as in events.log), set when the run has ended.
     pub events: Vec<Event>,
+    /// The smoothed output layout, when smoothing ran.
+    pub smoothed_layout: Option<SmoothedLayout>,
+    /// Every smoothed epoch, in order.
+    pub smoothed: Vec<SmoothedEpoch>,
+    /// The separation report.
+    pub separation: Vec<SeparationRow>,
 }
 
 impl MemorySink {
@@ -82,6 +145,25 @@ impl SolutionSink for MemorySink {
 
     fn epoch(&mut self, record: &SolutionRecord) -> Result<(), Error> {
         self.records.push(*record);
+        Ok(())
+    }
+
+    fn begin_smoothed(
+        &mut self,
+        layout: &SmoothedLayout,
+        _files: &mut Vec<PathBuf>,
+    ) -> Result<(), Error> {
+        self.smoothed_layout = Some(layout.clone());
+        Ok(())
+    }
+
+    fn smoothed(&mut self, epoch: &SmoothedEpoch) -> Result<(), Error> {
+        self.smoothed.push(epoch.clone());
+        Ok(())
+    }
+
+    fn separation(&mut self, row: &SeparationRow) -> Result<(), Error> {
+        self.separation.push(*row);
         Ok(())
     }
 

@@ -31,6 +31,8 @@ pub struct JobResult {
     pub last_output_t: Option<f64>,
     /// Write integrity.csv (the monitor ran).
     pub(crate) integrity_table: bool,
+    /// What the smoother did, when it ran.
+    pub smoother: Option<crate::SmootherReport>,
 }
 
 impl JobResult {
@@ -49,6 +51,7 @@ impl JobResult {
             notes: Vec::new(),
             last_output_t: None,
             integrity_table: false,
+            smoother: None,
         }
     }
 
@@ -107,6 +110,9 @@ impl JobResult {
             "events": s.events.iter().map(|e| e.to_string()).collect::<Vec<_>>(),
             "files": self.files.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
         });
+        if let Some(sm) = &self.smoother {
+            v["smoother"] = sm.to_json();
+        }
         if !s.source_states.is_empty() {
             // The sources' own states (e.g. the barometer bias), final value and 1-sigma.
             v["source_states"] = s

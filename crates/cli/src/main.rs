@@ -70,6 +70,17 @@ enum Command {
         /// windows (seconds) and `L/P@T[..U]` (L s every P s from T, starting before U).
         #[arg(long, value_name = "SPEC")]
         outages: Option<String>,
+        /// Smooth after the forward run (as `[smoother] enabled = true`): the
+        /// forward solution stays in solution.nav, the smoothed one goes to
+        /// smoothed.nav, smoothed_std.txt, smoothed.csv (smoothed_states.csv with
+        /// the extra states) and the separation report to separation.csv.
+        #[arg(long)]
+        smooth: bool,
+        /// Smoother mode (implies --smooth): `rts` (Rauch-Tung-Striebel over the
+        /// forward filter) or `combined` (an independent backward filter weighted
+        /// with the forward one). Default: the config's `[smoother] mode`, else rts.
+        #[arg(long, value_name = "MODE", value_parser = ["rts", "combined"])]
+        smooth_mode: Option<String>,
         /// No progress bar and no summary line.
         #[arg(long, short)]
         quiet: bool,
@@ -230,8 +241,10 @@ fn main() -> ExitCode {
             kf_gins,
             out,
             outages,
+            smooth,
+            smooth_mode,
             quiet,
-        } => run_cmd::main(config, kf_gins, out, outages, quiet),
+        } => run_cmd::main(config, kf_gins, out, outages, (smooth, smooth_mode), quiet),
         Command::Eval {
             solution,
             truth,

@@ -5,6 +5,7 @@
 use anyhow::{Context, Result};
 use navfuse_app::{config, FileSink, RunOptions, StopFlag};
 use navfuse_core::outage::OutageSchedule;
+use navfuse_io::input::SmootherMode;
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
@@ -14,6 +15,7 @@ pub fn main(
     kf_gins: Option<PathBuf>,
     out: Option<PathBuf>,
     outages: Option<String>,
+    (smooth, smooth_mode): (bool, Option<String>),
     quiet: bool,
 ) -> Result<()> {
     let path = kf_gins
@@ -32,6 +34,14 @@ pub fn main(
         let extra = OutageSchedule::parse(&spec).map_err(|e| anyhow::anyhow!("--outages: {e}"))?;
         cfg.nav.gnss.outages.windows.extend(extra.windows);
         cfg.nav.gnss.outages.periodic.extend(extra.periodic);
+    }
+    if smooth || smooth_mode.is_some() {
+        cfg.smoother.enabled = true;
+    }
+    match smooth_mode.as_deref() {
+        Some("rts") => cfg.smoother.mode = SmootherMode::Rts,
+        Some("combined") => cfg.smoother.mode = SmootherMode::Combined,
+        _ => {}
     }
     let out_dir = out
         .or_else(|| cfg.kfgins_output_path.clone())

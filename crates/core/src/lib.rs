@@ -24,6 +24,7 @@ pub(crate) mod mechanization;
 pub mod nav;
 pub mod outage;
 pub(crate) mod six_state;
+pub mod smoother;
 pub mod state;
 pub(crate) mod static_detect;
 pub mod time;
@@ -33,7 +34,7 @@ pub use aiding::source::{AidingSource, Fuser, Handled};
 pub use events::{AidStatus, Event, RunSummary};
 pub use nav::ins_filter::{BlockProcess, BlockSpec, Fused};
 pub use nav::navigator::{NavError, Navigator};
-pub use nav::run::{run, run_with_sources, SourceFactory};
+pub use nav::run::{run, run_recording, run_with_sources, SourceFactory};
 pub use nav::timeline;
 pub use types::{
     merge_measurements, merge_more, merge_raw_epochs, GnssFix, GnssRawEpoch, HeadingObs, ImuErrors,

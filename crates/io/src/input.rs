@@ -253,6 +253,48 @@ impl Default for OutputSpec {
     }
 }
 
+/// How the smoother works (`[smoother] mode`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SmootherMode {
+    /// Rauch-Tung-Striebel pass backwards over the forward filter's records.
+    Rts,
+    /// An independent backward filter combined with the forward one by covariance.
+    Combined,
+}
+
+impl SmootherMode {
+    pub fn name(self) -> &'static str {
+        match self {
+            SmootherMode::Rts => "rts",
+            SmootherMode::Combined => "combined",
+        }
+    }
+}
+
+/// Post-processing after the forward run (`[smoother]`, docs/CONFIG.md).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SmootherSpec {
+    pub enabled: bool,
+    pub mode: SmootherMode,
+    /// Separation report: epochs where forward and backward (or smoothed) differ by
+    /// more than this many sigma are flagged.
+    pub separation_sigma: f64,
+    /// Separation report period \[s\] (0: every output epoch).
+    pub separation_period_s: f64,
+}
+
+impl Default for SmootherSpec {
+    fn default() -> Self {
+        SmootherSpec {
+            enabled: false,
+            mode: SmootherMode::Rts,
+            separation_sigma: 3.0,
+            separation_period_s: 1.0,
+        }
+    }
+}
+
 /// What an odometer file holds (docs/FORMATS.md "Odometer").
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum OdometerFormat {

@@ -15,6 +15,7 @@ pub mod nav_written;
 pub mod odometer;
 pub mod rinex_nav;
 pub mod rinex_obs;
+pub mod smoothed;
 pub mod time;
 pub mod timetag;
 

@@ -96,14 +96,14 @@ pub(crate) fn std_fields(std: &[f64; 21]) -> [f64; 21] {
 }
 
 /// A buffered output file with a reused line buffer.
-struct Out {
+pub(crate) struct Out {
     path: PathBuf,
     w: BufWriter<File>,
-    line: Vec<u8>,
+    pub(crate) line: Vec<u8>,
 }
 
 impl Out {
-    fn create(path: &Path) -> Result<Self, InputError> {
+    pub(crate) fn create(path: &Path) -> Result<Self, InputError> {
         let f = File::create(path).map_err(|e| InputError::create(path, &e))?;
         Ok(Out {
             path: path.to_path_buf(),
@@ -113,14 +113,14 @@ impl Out {
     }
 
     /// Write the line buffer (then clear it).
-    fn put(&mut self) -> Result<(), InputError> {
+    pub(crate) fn put(&mut self) -> Result<(), InputError> {
         let r = self.w.write_all(&self.line);
         self.line.clear();
         r.map_err(|e| InputError::write(&self.path, &e))
     }
 
     /// Hand the buffered lines to the file.
-    fn flush(&mut self) -> Result<(), InputError> {
+    pub(crate) fn flush(&mut self) -> Result<(), InputError> {
         self.w
             .flush()
             .map_err(|e| InputError::write(&self.path, &e))
@@ -129,7 +129,7 @@ impl Out {
     /// Flush and close. When the flush fails (disk full), what could not be written
     /// is dropped and the file is cut after its last complete line, so that it holds
     /// only whole records.
-    fn finish(self) -> Result<(), InputError> {
+    pub(crate) fn finish(self) -> Result<(), InputError> {
         let Out { path, mut w, .. } = self;
         match w.flush() {
             Ok(()) => Ok(()),

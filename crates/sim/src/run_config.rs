@@ -249,6 +249,7 @@ pub fn run_config(sc: &Scenario, dir: &Path) -> RunConfig {
         source_path: dir.join("run.toml"),
         kfgins_output_path: None,
         warnings: Vec::new(),
+        smoother: Default::default(),
         relative_outages: Vec::new(),
     }
 }

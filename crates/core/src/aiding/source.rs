@@ -181,12 +181,12 @@ impl Fuser<'_> {
 
     /// Add `var` to the variance of state `i` (covariance flushed by the caller).
     pub fn add_variance(&mut self, i: usize, var: f64) {
-        self.ins.filter.p[(i, i)] += var;
+        self.ins.add_variance(i, var);
     }
 
     /// Reset state `i`: uncorrelated, with variance `var`.
     pub fn reset_state(&mut self, i: usize, var: f64) {
-        self.ins.filter.reset_state(i, var);
+        self.ins.reset_state(i, var);
     }
 
     /// Nominal values of a source block (empty when the layout lacks it).

@@ -8,13 +8,15 @@
 //! over that span (docs/ALGORITHMS.md "Error-state filter"; REFERENCES \[SYS\] §2).
 
 use crate::aiding::{AidingContext, Linearized, ReceiverClock, VehicleEstimate};
-use crate::attitude::{c_bn_from_euler, q_bn_from_euler, quat_from_rotvec};
+use crate::attitude::{c_bn_from_euler, q_bn_from_euler};
 use crate::config::{NavConfig, NhcMode};
-use crate::earth::{lla_add_ned, lla_to_ecef};
+use crate::earth::lla_to_ecef;
 use crate::error_model::{fill_f, fill_qc, Discretizer, MeanMotion};
 use crate::filter::{Eskf, UpdateOutcome};
 use crate::mechanization::Mechanizer;
 use crate::six_state::SixState;
+use crate::smoother::nominal::{correct, source_ranges, Nominal, NominalMut};
+use crate::smoother::record::{Recorder, Transition};
 use crate::state::{Block, StateLayout, ATT, BA, BG, N_INS, POS, SA, SG, VEL};
 use crate::types::{ImuErrors, ImuSample, NavState};
 use nalgebra::{DMatrix, DVector, Vector3};
@@ -95,6 +97,8 @@ pub struct InsFilter {
     /// and the output solution built from it; this filter is then a dead reckoning.
     pub(crate) six_state: Option<SixState>,
     pub(crate) six_state_out: NavState,
+    /// What the RTS smoother needs, when the run records for it (smoother/record.rs).
+    pub(crate) recorder: Option<Recorder>,
 }
 
 /// What an update applied.
@@ -243,6 +247,7 @@ impl InsFilter {
             random_walks: Vec::new(),
             displacement: track_displacement.then(|| (Vector3::zeros(), lla_to_ecef(&lla))),
             corrections: 0,
+            recorder: None,
         }
     }
 
@@ -318,6 +323,7 @@ impl InsFilter {
     /// covariance brought up to date first): what re-admissions and gaps widen.
     pub(crate) fn widen(&mut self, block: usize, var: Vector3<f64>) {
         self.flush_covariance();
+        self.record(Transition::AddVariance);
         for k in 0..3 {
             self.filter.p[(block + k, block + k)] += var[k];
         }
@@ -388,6 +394,13 @@ impl InsFilter {
                 }
             }
         }
+        if let Some(r) = self.recorder.as_mut() {
+            r.transition(
+                self.nav.t,
+                Transition::Propagate(&self.disc.phi),
+                &self.filter.p,
+            );
+        }
         self.filter.predict(&self.disc.phi, &self.disc.qd);
         if let Some(six) = self.six_state.as_mut() {
             // The six-state process noise follows the DR errors (six_state.rs).
@@ -421,8 +434,14 @@ impl InsFilter {
             Some(_) => self.filter.gain(&lin.h, &lin.r),
             None => None,
         };
+        if let Some(r) = self.recorder.as_mut() {
+            r.before_update(&self.filter.p);
+        }
         let out = self.filter.update(&lin.y, &lin.h, &lin.r, gate);
         if let UpdateOutcome::Applied { dx, .. } = &out {
+            if let Some(r) = self.recorder.as_mut() {
+                r.applied(dx);
+            }
             if let (Some(six), Some(k)) = (self.six_state.as_mut(), gain) {
                 six.on_dr_update(&k, &lin.h);
             }
@@ -433,44 +452,20 @@ impl InsFilter {
 
     /// Closed-loop feedback of the error estimate, then implicit reset to zero.
     fn feedback(&mut self, dx: &DVector<f64>) {
-        let d_pos = Vector3::new(dx[POS], dx[POS + 1], dx[POS + 2]);
-        let d_vel = Vector3::new(dx[VEL], dx[VEL + 1], dx[VEL + 2]);
-        let phi = Vector3::new(dx[ATT], dx[ATT + 1], dx[ATT + 2]);
         let old_lla = self.nav.lla;
-        self.nav.lla = lla_add_ned(&self.nav.lla, &(-d_pos));
-        self.nav.v_n -= d_vel;
-        // C_true = (I + phi x) C_est.
-        self.nav.q_bn = quat_from_rotvec(&phi) * self.nav.q_bn;
+        let st = NominalMut {
+            nav: &mut self.nav,
+            imu_errors: &mut self.imu_errors,
+            time_offset_s: &mut self.time_offset_s,
+            time_offset_rate: &mut self.time_offset_rate,
+            odometer_scale: &mut self.vehicle.odometer_scale,
+            c_bm: &mut self.vehicle.c_bm,
+            extra: &mut self.extra,
+        };
+        correct(&self.layout, dx, st, source_ranges(&self.layout));
+        let d_vel = Vector3::new(dx[VEL], dx[VEL + 1], dx[VEL + 2]);
         self.mech
             .shift_previous(&(self.nav.lla - old_lla), &(-d_vel));
-        let e = &mut self.imu_errors;
-        for k in 0..3 {
-            e.gyro_bias[k] += dx[BG + k];
-            e.accel_bias[k] += dx[BA + k];
-            e.gyro_scale[k] += dx[SG + k];
-            e.accel_scale[k] += dx[SA + k];
-        }
-        if let Some(i) = self.layout.index(Block::TimeOffset) {
-            self.time_offset_s -= dx[i];
-        }
-        if let Some(i) = self.layout.index(Block::TimeOffsetRate) {
-            self.time_offset_rate -= dx[i];
-        }
-        if let Some(i) = self.layout.index(Block::OdometerScale) {
-            self.vehicle.odometer_scale -= dx[i];
-        }
-        if let Some(i) = self.layout.index(Block::Mounting) {
-            // C_b^m,true = (I + dalpha x) C_b^m,est, dalpha = (0, pitch, yaw).
-            let da = Vector3::new(0.0, dx[i], dx[i + 1]);
-            self.vehicle.c_bm =
-                quat_from_rotvec(&da).to_rotation_matrix().into_inner() * self.vehicle.c_bm;
-        }
-        // The sources' blocks: x_est - x_true, so the estimate moves by -dx.
-        for sb in &self.source_blocks {
-            for k in sb.index..sb.index + sb.block.len() {
-                self.extra[k] -= dx[k];
-            }
-        }
         self.corrections += 1;
         // The displacement since the previous epoch is the mechanization's only.
         if let Some((_, last)) = self.displacement.as_mut() {
@@ -478,6 +473,42 @@ impl InsFilter {
         }
         // The dead reckoning's own corrections are part of its increments.
         self.six_state_follow_dr();
+    }
+
+    /// Add `var` to the variance of state `i` (covariance flushed by the caller).
+    pub(crate) fn add_variance(&mut self, i: usize, var: f64) {
+        self.record(Transition::AddVariance);
+        self.filter.p[(i, i)] += var;
+    }
+
+    /// Re-initialise state `i`: uncorrelated, with variance `var`.
+    pub(crate) fn reset_state(&mut self, i: usize, var: f64) {
+        self.record(Transition::Reset(i));
+        self.filter.reset_state(i, var);
+    }
+
+    fn record(&mut self, tr: Transition<'_>) {
+        if let Some(r) = self.recorder.as_mut() {
+            r.transition(self.nav.t, tr, &self.filter.p);
+        }
+    }
+
+    /// Record for the RTS smoother from now on.
+    pub(crate) fn start_recording(&mut self) {
+        self.recorder = Some(Recorder::new(self.nav.t, self.layout.len()));
+    }
+
+    /// Everything of the state but the covariance.
+    pub(crate) fn nominal(&self) -> Nominal {
+        Nominal {
+            nav: self.nav,
+            imu_errors: self.imu_errors,
+            time_offset_s: self.time_offset_s,
+            time_offset_rate: self.time_offset_rate,
+            odometer_scale: self.vehicle.odometer_scale,
+            c_bm: self.vehicle.c_bm,
+            extra: self.extra.clone(),
+        }
     }
 
     /// The mechanization's own displacement since the last restart, ECEF \[m\].

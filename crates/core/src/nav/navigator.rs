@@ -17,6 +17,7 @@ use crate::attitude::{euler_from_c_bn, euler_from_q_bn};
 use crate::config::NavConfig;
 use crate::events::{AidStatus, Event, RunSummary};
 use crate::integrity::IntegrityState;
+use crate::smoother::{Nominal, RtsRecord};
 use crate::state::{Block, StateLayout, ATT, N_INS, POS, VEL};
 use crate::types::{ImuErrors, ImuSample, Measurement, NavState};
 use nalgebra::{DMatrix, Vector3};
@@ -201,6 +202,33 @@ impl Navigator {
         self.ins.nav_is_finite()
     }
 
+    /// Record what the RTS smoother needs from now on (crate::smoother): one
+    /// record per covariance epoch, taken with [`Navigator::take_smoother_records`].
+    pub fn record_for_smoothing(&mut self) {
+        self.ins.start_recording();
+    }
+
+    /// Index of the smoother record the current epoch belongs to (the last one
+    /// started); None when not recording.
+    pub fn smoother_record_index(&self) -> Option<u64> {
+        self.ins.recorder.as_ref().map(|r| r.current_index())
+    }
+
+    /// The smoother records closed since the last call (after
+    /// [`Navigator::finish`], the last one too).
+    pub fn take_smoother_records(&mut self) -> Vec<RtsRecord> {
+        match self.ins.recorder.as_mut() {
+            Some(r) => r.drain().collect(),
+            None => Vec::new(),
+        }
+    }
+
+    /// Everything of the filter's state but the covariance (the error-state
+    /// filter's own, also with `GnssFusion::SixState`).
+    pub fn nominal(&self) -> Nominal {
+        self.ins.nominal()
+    }
+
     /// Six-state fusion runs (its filter could be started).
     pub(crate) fn has_six_state(&self) -> bool {
         self.ins.six_state.is_some()
@@ -318,6 +346,9 @@ impl Navigator {
 
     /// The end-of-run summary with the final estimates.
     pub fn finish(&mut self) -> RunSummary {
+        if let Some(r) = self.ins.recorder.as_mut() {
+            r.finish(&self.ins.filter.p);
+        }
         let ins = &self.ins;
         let s = &mut self.summary;
         if let Some(i) = ins.layout.index(Block::TimeOffset) {

@@ -8,6 +8,7 @@ use crate::aiding::registry;
 use crate::aiding::source::AidingSource;
 use crate::config::{GnssFusion, NavConfig};
 use crate::events::{Event, RunSummary};
+use crate::smoother::RtsRecord;
 use crate::types::{ImuSample, Measurement};
 
 /// Run the navigator over an IMU stream and a time-sorted list of measurements
@@ -52,8 +53,64 @@ pub fn run_with_sources<E: From<NavError>>(
     imu: impl Iterator<Item = Result<ImuSample, E>>,
     measurements: &[Measurement],
     output_period_s: Option<f64>,
+    on_output: impl FnMut(&Navigator) -> Result<(), E>,
+    on_progress: impl FnMut(f64),
+) -> Result<RunSummary, E> {
+    drive(
+        cfg,
+        extra_sources,
+        imu,
+        measurements,
+        output_period_s,
+        on_output,
+        on_progress,
+        None,
+    )
+}
+
+/// [`run_with_sources`] recording for the RTS smoother (crate::smoother) when
+/// `on_record` is given: every record is handed to it as it closes, the last one
+/// after the last IMU sample; output epochs know their record by
+/// [`Navigator::smoother_record_index`].
+#[allow(clippy::too_many_arguments)]
+pub fn run_recording<E: From<NavError>>(
+    cfg: &NavConfig,
+    extra_sources: impl FnOnce(&NavConfig, f64) -> Vec<Box<dyn AidingSource>>,
+    imu: impl Iterator<Item = Result<ImuSample, E>>,
+    measurements: &[Measurement],
+    output_period_s: Option<f64>,
+    on_output: impl FnMut(&Navigator) -> Result<(), E>,
+    on_progress: impl FnMut(f64),
+    on_record: Option<&mut dyn FnMut(RtsRecord) -> Result<(), E>>,
+) -> Result<RunSummary, E> {
+    if on_record.is_some() && matches!(cfg.gnss.fusion, GnssFusion::SixState { .. }) {
+        return Err(NavError(
+            "smoothing works on the error-state filter; gnss fusion \"six_state\" cannot be smoothed (use the default fusion)".into(),
+        )
+        .into());
+    }
+    drive(
+        cfg,
+        extra_sources,
+        imu,
+        measurements,
+        output_period_s,
+        on_output,
+        on_progress,
+        on_record,
+    )
+}
+
+#[allow(clippy::too_many_arguments)]
+fn drive<E: From<NavError>>(
+    cfg: &NavConfig,
+    extra_sources: impl FnOnce(&NavConfig, f64) -> Vec<Box<dyn AidingSource>>,
+    imu: impl Iterator<Item = Result<ImuSample, E>>,
+    measurements: &[Measurement],
+    output_period_s: Option<f64>,
     mut on_output: impl FnMut(&Navigator) -> Result<(), E>,
     mut on_progress: impl FnMut(f64),
+    mut on_record: Option<&mut dyn FnMut(RtsRecord) -> Result<(), E>>,
 ) -> Result<RunSummary, E> {
     if matches!(cfg.gnss.fusion, GnssFusion::SixState { .. }) && cfg.tight.enabled {
         return Err(NavError(
@@ -73,6 +130,9 @@ pub fn run_with_sources<E: From<NavError>>(
     let mut sources = registry::sources(cfg, start.t0);
     sources.extend(extra_sources(cfg, start.t0));
     let mut n = Navigator::with_sources(cfg, start.t0, start.lla, start.rpy, start.v_n, sources);
+    if on_record.is_some() {
+        n.record_for_smoothing();
+    }
     if matches!(cfg.gnss.fusion, GnssFusion::SixState { .. }) && !n.has_six_state() {
         return Err(NavError(format!(
             "six-state fusion: the initial position, velocity or their standard deviations are not finite (start at t = {:.3})",
@@ -107,6 +167,11 @@ pub fn run_with_sources<E: From<NavError>>(
             break;
         }
         n.step(&s, &mut inbox)?;
+        if let Some(f) = on_record.as_mut() {
+            for r in n.take_smoother_records() {
+                f(r)?;
+            }
+        }
         // Cadence on the time scale the records carry (GNSS time).
         let t_out = n.time_gnss();
         let due = match period {
@@ -122,5 +187,11 @@ pub fn run_with_sources<E: From<NavError>>(
         }
         t_prev = t_out;
     }
-    Ok(n.finish())
+    let summary = n.finish();
+    if let Some(f) = on_record.as_mut() {
+        for r in n.take_smoother_records() {
+            f(r)?;
+        }
+    }
+    Ok(summary)
 }

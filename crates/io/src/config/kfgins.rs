@@ -207,6 +207,7 @@ pub(super) fn kfgins_to_raw(y: KfYaml, w: &mut Vec<String>) -> KResult<(TomlRoot
         odometer: None,
         heading: None,
         baro: None,
+        smoother: None,
         time: TTime {
             start: Some(y.starttime),
             // KF-GINS: a negative endtime means the end of the IMU file

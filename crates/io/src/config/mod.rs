@@ -34,6 +34,7 @@ mod output;
 mod paths;
 mod rinex;
 mod root;
+mod smoother;
 mod spoofing;
 mod tight;
 mod time;
@@ -110,6 +111,8 @@ pub struct RunConfig {
     /// Barometer input (`[baro]`); None = none. Times on the IMU time scale.
     pub baro: Option<crate::baro::BaroSource>,
     pub output: OutputSpec,
+    /// Post-processing after the forward run (`[smoother]`).
+    pub smoother: crate::input::SmootherSpec,
     /// The config file this came from.
     pub source_path: PathBuf,
     /// KF-GINS `outputpath` (resolved against the YAML's directory); the CLI's `--out`

@@ -20,12 +20,15 @@ use super::nhc::{self, TNhc};
 use super::odometer::{self, TOdometer};
 use super::output::{self, TOutput};
 use super::paths::PathWriter;
+use super::smoother::{self, TSmoother};
 use super::spoofing::{self, TSpoofing};
 use super::time::{self, TTime};
 use super::vehicle::{self, TVehicle};
 use super::zupt::{self, TZupt};
 use super::{RelativeOutage, RunConfig};
-use crate::input::{GnssSource, HeadingSource, ImuSource, OdometerSource, OutputSpec};
+use crate::input::{
+    GnssSource, HeadingSource, ImuSource, OdometerSource, OutputSpec, SmootherSpec,
+};
 
 /// navfuse TOML, as written (user units).
 #[derive(Debug, Deserialize, Serialize)]
@@ -56,6 +59,8 @@ pub(super) struct TomlRoot {
     pub(super) filter: TFilter,
     #[serde(default, skip_serializing_if = "TOutput::is_empty")]
     pub(super) output: TOutput,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) smoother: Option<TSmoother>,
 }
 
 /// A [`RunConfig`] but for where it came from.
@@ -68,6 +73,7 @@ pub(super) struct Converted {
     heading: Option<HeadingSource>,
     baro: Option<crate::baro::BaroSource>,
     output: OutputSpec,
+    smoother: SmootherSpec,
     relative_outages: Vec<RelativeOutage>,
 }
 
@@ -86,6 +92,7 @@ impl Converted {
             heading: self.heading,
             baro: self.baro,
             output: self.output,
+            smoother: self.smoother,
             source_path: path.to_path_buf(),
             kfgins_output_path: kf_out,
             warnings,
@@ -118,6 +125,10 @@ pub(super) fn convert(raw: TomlRoot, base: &Path) -> KResult<Converted> {
     let initial = initial::convert(&raw.initial, &imu_noise)?;
     let filter = filter::convert(&raw.filter)?;
     let output = output::convert(&raw.output)?;
+    let smoother = match &raw.smoother {
+        Some(t) => smoother::convert(t)?,
+        None => SmootherSpec::default(),
+    };
     let d = NavConfig::new(imu_noise, initial);
     let vehicle = raw.vehicle.as_ref().map(vehicle::convert).transpose()?;
     let nhc = raw.nhc.as_ref().map(nhc::convert).transpose()?;
@@ -173,6 +184,7 @@ pub(super) fn convert(raw: TomlRoot, base: &Path) -> KResult<Converted> {
         heading: heading_src,
         baro: baro_src,
         output,
+        smoother,
         relative_outages,
     })
 }
@@ -198,5 +210,6 @@ pub(super) fn to_raw(c: &RunConfig, w: &PathWriter) -> TomlRoot {
         spoofing: spoofing::to_toml(&n.integrity),
         filter: filter::to_toml(&n.filter),
         output: output::to_toml(&c.output),
+        smoother: smoother::to_toml(&c.smoother),
     }
 }

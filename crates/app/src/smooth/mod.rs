@@ -1,0 +1,402 @@
+//! Post-processing after the forward run (`[smoother]`, docs/ALGORITHMS.md
+//! "Smoothing"): the forward pass writes what the smoother needs to scratch files
+//! ([`ForwardLog`]); afterwards the RTS backward pass (mode "rts") or an independent
+//! backward filter (mode "combined") gives the smoothed solution, pushed into the
+//! sink with the separation report.
+
+mod codec;
+mod spill;
+
+use crate::error::Error;
+use crate::sink::{OutputLayout, SmoothedEpoch, SmoothedLayout, SolutionSink};
+use crate::summary::JobResult;
+use codec::{Dec, Enc};
+use indicatif::{ProgressBar, ProgressStyle};
+use nalgebra::DVector;
+use navfuse_core::smoother::{self, extra_names, Nominal, RtsBackward, RtsRecord};
+use navfuse_core::state::{StateLayout, ATT, N_INS};
+use navfuse_core::time::split_week;
+use navfuse_core::{ImuSample, Navigator};
+use navfuse_io::input::{SmootherMode, SmootherSpec};
+use navfuse_io::nav::SolutionRecord;
+use navfuse_io::smoothed::SeparationRow;
+use spill::Spill;
+use std::path::Path;
+use std::time::Instant;
+
+/// What smoothing did (in summary.json as "smoother").
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SmootherReport {
+    pub mode: &'static str,
+    /// Covariance epochs recorded by the forward pass (mode "rts").
+    pub records: u64,
+    /// Output epochs smoothed.
+    pub epochs: u64,
+    /// Size of the scratch files \[bytes\].
+    pub scratch_bytes: u64,
+    /// Wall time of the smoothing after the forward run \[s\].
+    pub wall_s: f64,
+    /// RTS steps whose prior covariance needed an eigen-decomposition.
+    pub pseudo_inverses: u64,
+    /// Rows of the separation report, and how many are flagged.
+    pub separation_rows: u64,
+    pub separation_flagged: u64,
+    /// Largest |difference| / sigma in the separation report.
+    pub separation_max_ratio: f64,
+    /// Output epochs the backward filter did not reach (mode "combined"; they keep
+    /// the forward solution).
+    pub forward_only: u64,
+}
+
+impl SmootherReport {
+    pub fn to_json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "mode": self.mode,
+            "records": self.records,
+            "epochs": self.epochs,
+            "scratch_bytes": self.scratch_bytes,
+            "wall_s": self.wall_s,
+            "pseudo_inverses": self.pseudo_inverses,
+            "separation_rows": self.separation_rows,
+            "separation_flagged": self.separation_flagged,
+            "separation_max_ratio": self.separation_max_ratio,
+            "forward_only": self.forward_only,
+        })
+    }
+}
+
+fn io_err(what: &str) -> impl Fn(std::io::Error) -> Error + '_ {
+    move |e| Error::io(format!("smoother scratch file ({what})"), e)
+}
+
+/// What the forward pass keeps for the smoother, on disk.
+pub(crate) struct ForwardLog {
+    spec: SmootherSpec,
+    records: Spill,
+    epochs: Spill,
+    imu: Option<Spill>,
+    layout: Option<StateLayout>,
+    source_idx: Vec<usize>,
+    week: u32,
+    enc: Enc,
+}
+
+impl ForwardLog {
+    /// Scratch files in `dir`; `week`: the GPS week the run's times count from.
+    pub fn create(dir: &Path, spec: &SmootherSpec, week: u32) -> Result<Self, Error> {
+        let e = |err| {
+            Error::io(
+                format!(
+                    "cannot create the smoother's scratch files in {}",
+                    dir.display()
+                ),
+                err,
+            )
+        };
+        Ok(ForwardLog {
+            spec: spec.clone(),
+            records: Spill::create(dir, "rts").map_err(e)?,
+            epochs: Spill::create(dir, "epochs").map_err(e)?,
+            imu: match spec.mode {
+                SmootherMode::Combined => Some(Spill::create(dir, "imu").map_err(e)?),
+                SmootherMode::Rts => None,
+            },
+            layout: None,
+            source_idx: Vec::new(),
+            week,
+            enc: Enc::default(),
+        })
+    }
+
+    /// Keep an IMU sample for the backward filter (mode "combined").
+    pub fn imu(&mut self, s: &ImuSample) -> Result<(), Error> {
+        if let Some(sp) = self.imu.as_mut() {
+            self.enc.clear();
+            codec::put_imu(&mut self.enc, s);
+            sp.push(&self.enc.0).map_err(io_err("imu"))?;
+        }
+        Ok(())
+    }
+
+    /// Keep a record of the forward filter.
+    pub fn record(&mut self, r: RtsRecord) -> Result<(), Error> {
+        if self.spec.mode == SmootherMode::Rts {
+            self.enc.clear();
+            codec::put_record(&mut self.enc, &r);
+            self.records.push(&self.enc.0).map_err(io_err("records"))?;
+        }
+        Ok(())
+    }
+
+    /// Keep an output epoch: its nominal state, the record it belongs to, its GNSS
+    /// integrity flag; in mode "combined" also its variances.
+    pub fn epoch(&mut self, n: &Navigator, integrity: Option<u8>) -> Result<(), Error> {
+        if self.layout.is_none() {
+            let l = n.layout().clone();
+            self.source_idx = smoother::nominal::source_ranges(&l).flatten().collect();
+            self.layout = Some(l);
+        }
+        let e = &mut self.enc;
+        e.clear();
+        e.u(n.smoother_record_index().unwrap_or(0));
+        e.u(integrity.map_or(255, u64::from));
+        codec::put_nominal(e, &n.nominal(), &self.source_idx);
+        if self.spec.mode == SmootherMode::Combined {
+            let p = n.covariance();
+            e.fs((0..p.nrows()).map(|i| &p[(i, i)]).collect::<Vec<_>>());
+        }
+        self.epochs.push(&self.enc.0).map_err(io_err("epochs"))
+    }
+}
+
+struct Epoch {
+    record: u64,
+    integrity: Option<u8>,
+    nominal: Nominal,
+    var: Option<DVector<f64>>,
+}
+
+fn get_epoch(b: &[u8], n: usize, source_idx: &[usize], with_var: bool) -> std::io::Result<Epoch> {
+    let mut d = Dec::new(b);
+    let record = d.u()?;
+    let flag = d.u()?;
+    let nominal = codec::get_nominal(&mut d, n, source_idx)?;
+    let var = if with_var { Some(d.vec(n)?) } else { None };
+    Ok(Epoch {
+        record,
+        integrity: (flag != 255).then_some(flag as u8),
+        nominal,
+        var,
+    })
+}
+
+fn bar(progress: bool, len: u64, what: &str) -> Option<ProgressBar> {
+    progress.then(|| {
+        let b = ProgressBar::new(len.max(1));
+        b.set_style(
+            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {msg}")
+                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        b.set_message(what.to_string());
+        b
+    })
+}
+
+/// The smoothed output record of one epoch.
+fn output(
+    week: u32,
+    m: &Nominal,
+    var: &DVector<f64>,
+    base: &OutputLayout,
+    integrity: Option<u8>,
+    layout: &StateLayout,
+) -> SmoothedEpoch {
+    let (wk, t) = split_week(week, m.nav.t - m.time_offset_s);
+    let mut std = [0.0; N_INS];
+    for (i, s) in std.iter_mut().enumerate() {
+        *s = var[i].max(0.0).sqrt();
+    }
+    SmoothedEpoch {
+        record: SolutionRecord {
+            gps_week: wk,
+            nav: navfuse_core::NavState { t, ..m.nav },
+            imu_errors: m.imu_errors,
+            std: base.std.then_some(std),
+            gnss_integrity: integrity,
+        },
+        states: m.extra_values(layout),
+        states_std: (N_INS..layout.len())
+            .map(|i| var[i].max(0.0).sqrt())
+            .collect(),
+    }
+}
+
+/// The separation row of difference `d` (error-state, forward minus the other)
+/// with variances `var_d`.
+fn separation_row(
+    rec: &SolutionRecord,
+    d: &DVector<f64>,
+    var_d: impl Fn(usize) -> f64,
+    k_sigma: f64,
+) -> SeparationRow {
+    let mut diff = [0.0; 9];
+    let mut sigma = [0.0; 9];
+    let mut max_ratio: f64 = 0.0;
+    for i in 0..9 {
+        diff[i] = d[i];
+        sigma[i] = var_d(i).max(0.0).sqrt();
+        // A difference with no spread (state not improved) cannot be judged.
+        if sigma[i] > 1e-12 * (1.0 + diff[i].abs()) || (i >= ATT && sigma[i] > 0.0) {
+            max_ratio = max_ratio.max(diff[i].abs() / sigma[i]);
+        }
+    }
+    SeparationRow {
+        gps_week: rec.gps_week,
+        t: rec.nav.t,
+        diff,
+        sigma,
+        max_ratio,
+        flagged: max_ratio > k_sigma,
+    }
+}
+
+/// Separation cadence: the first epoch at or after each multiple of the period.
+struct Cadence {
+    period: f64,
+    last: Option<f64>,
+}
+
+impl Cadence {
+    fn due(&mut self, t: f64) -> bool {
+        let due = match self.last {
+            None => true,
+            Some(_) if self.period <= 0.0 => true,
+            Some(l) => ((t + 1e-6) / self.period).floor() > ((l + 1e-6) / self.period).floor(),
+        };
+        if due {
+            self.last = Some(t);
+        }
+        due
+    }
+}
+
+impl ForwardLog {
+    /// Smooth after a completed forward run and push the result into `sink`.
+    pub fn smooth(
+        mut self,
+        base: &OutputLayout,
+        sink: &mut dyn SolutionSink,
+        progress: bool,
+        job: &mut JobResult,
+    ) -> Result<SmootherReport, Error> {
+        let t0 = Instant::now();
+        let Some(layout) = self.layout.clone() else {
+            return Err(Error::Other(
+                "smoothing: the forward run gave no output epoch".into(),
+            ));
+        };
+        let mut rep = SmootherReport {
+            mode: self.spec.mode.name(),
+            ..Default::default()
+        };
+        let slayout = SmoothedLayout {
+            base: *base,
+            mode: rep.mode,
+            state_names: extra_names(&layout),
+        };
+        sink.begin_smoothed(&slayout, &mut job.files)?;
+        let r = match self.spec.mode {
+            SmootherMode::Rts => self.rts(&layout, base, sink, progress, &mut rep),
+            SmootherMode::Combined => Err(Error::Other(
+                "smoother mode \"combined\" is not available in this build".into(),
+            )),
+        };
+        let ended = sink.end_smoothed();
+        r?;
+        ended?;
+        rep.wall_s = t0.elapsed().as_secs_f64();
+        Ok(rep)
+    }
+
+    fn rts(
+        &mut self,
+        layout: &StateLayout,
+        base: &OutputLayout,
+        sink: &mut dyn SolutionSink,
+        progress: bool,
+        rep: &mut SmootherReport,
+    ) -> Result<(), Error> {
+        let n = layout.len();
+        rep.records = self.records.len();
+        let dir = std::env::temp_dir();
+        let mut smoothed = Spill::create(self.records_dir().as_deref().unwrap_or(&dir), "smoothed")
+            .map_err(io_err("smoothed"))?;
+        // Backward pass, last record first.
+        let b = bar(progress, rep.records, "smoothing: backward pass");
+        let mut back = RtsBackward::new();
+        let mut rd = self.records.backward().map_err(io_err("records"))?;
+        let mut k = 0u64;
+        while let Some(bytes) = rd.next_entry().map_err(io_err("records"))? {
+            let rec = codec::get_record(bytes).map_err(io_err("records"))?;
+            let var_fwd = rec.p_post.diagonal();
+            let s = back
+                .step(rec)
+                .map_err(|e| Error::Other(format!("smoothing: {e}")))?;
+            self.enc.clear();
+            codec::put_smoothed(&mut self.enc, &s, &var_fwd);
+            smoothed.push(&self.enc.0).map_err(io_err("smoothed"))?;
+            k += 1;
+            if let Some(b) = &b {
+                if k % 1024 == 0 {
+                    b.set_position(k);
+                }
+            }
+        }
+        if let Some(b) = &b {
+            b.finish_and_clear();
+        }
+        rep.pseudo_inverses = back.pseudo_inverses;
+        rep.scratch_bytes = self.records.bytes() + self.epochs.bytes() + smoothed.bytes();
+        // Forward again: the epochs with the smoothed records in time order.
+        let b = bar(progress, self.epochs.len(), "smoothing: output");
+        let mut sm = smoothed.backward().map_err(io_err("smoothed"))?;
+        let mut next_sm = || -> Result<Option<_>, Error> {
+            match sm.next_entry().map_err(io_err("smoothed"))? {
+                Some(b) => Ok(Some(codec::get_smoothed(b).map_err(io_err("smoothed"))?)),
+                None => Ok(None),
+            }
+        };
+        let mut cur = next_sm()?;
+        let mut nxt = next_sm()?;
+        let mut cur_index = 0u64;
+        let mut ep = self.epochs.forward().map_err(io_err("epochs"))?;
+        let mut cadence = Cadence {
+            period: self.spec.separation_period_s,
+            last: None,
+        };
+        while let Some(bytes) = ep.next_entry().map_err(io_err("epochs"))? {
+            let e = get_epoch(bytes, n, &self.source_idx, false).map_err(io_err("epochs"))?;
+            while cur_index < e.record {
+                cur = nxt.take();
+                nxt = next_sm()?;
+                cur_index += 1;
+            }
+            let Some((at, var_fwd)) = cur.as_ref() else {
+                return Err(Error::Other(format!(
+                    "smoothing: no record {} for the output epoch at t = {:.3}",
+                    e.record, e.nominal.nav.t
+                )));
+            };
+            let s = smoother::error_at(e.nominal.nav.t, at, nxt.as_ref().map(|x| &x.0));
+            let m = e.nominal.corrected(layout, &s);
+            let out = output(self.week, &m, &at.var, base, e.integrity, layout);
+            if cadence.due(m.nav.t) {
+                let row = separation_row(
+                    &out.record,
+                    &s,
+                    |i| var_fwd[i] - at.var[i],
+                    self.spec.separation_sigma,
+                );
+                rep.separation_rows += 1;
+                rep.separation_flagged += u64::from(row.flagged);
+                rep.separation_max_ratio = rep.separation_max_ratio.max(row.max_ratio);
+                sink.separation(&row)?;
+            }
+            sink.smoothed(&out)?;
+            rep.epochs += 1;
+            if let Some(b) = &b {
+                if rep.epochs % 8192 == 0 {
+                    b.set_position(rep.epochs);
+                }
+            }
+        }
+        if let Some(b) = &b {
+            b.finish_and_clear();
+        }
+        Ok(())
+    }
+
+    fn records_dir(&self) -> Option<std::path::PathBuf> {
+        self.records.dir()
+    }
+}

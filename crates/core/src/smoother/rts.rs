@@ -1,0 +1,285 @@
+//! The backward pass of the Rauch-Tung-Striebel smoother over the records of a
+//! closed-loop error-state filter (REFERENCES \[RTS65\], \[GRO13\] §3.4.2; the
+//! feedback resets as in docs/ALGORITHMS.md "Smoothing").
+//!
+//! Record k: prior covariance P_k^-, updated P_k^+, transition Phi_k from record
+//! k-1, correction dx_k fed back. Errors are taken relative to the forward nominal
+//! after feedback, where the filter's own estimate is zero, so with
+//! s_k^- = s_k^+ + dx_k (the same error relative to the nominal before feedback):
+//!
+//!   C_k     = P_k^+ Phi_{k+1}^T (P_{k+1}^-)^-1
+//!   s_k^+   = C_k s_{k+1}^-                       (s_N^+ = 0)
+//!   P_k|N   = (I - C_k Phi_{k+1}) P_k^+ (I - C_k Phi_{k+1})^T
+//!             + C_k (Q_{k+1} + P_{k+1|N}) C_k^T,  Q_{k+1} = P_{k+1}^- - Phi P_k^+ Phi^T
+//!
+//! The covariance line is the Joseph-like form of P_k^+ + C_k (P_{k+1|N} -
+//! P_{k+1}^-) C_k^T: a sum of positive semi-definite terms, symmetrised.
+
+use super::record::RtsRecord;
+use nalgebra::{DMatrix, DVector};
+
+/// The smoothed error estimate at one record.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SmoothedRecord {
+    /// IMU time of the record \[s\].
+    pub t: f64,
+    /// Smoothed error relative to the forward nominal after the record's feedback.
+    pub s_post: DVector<f64>,
+    /// The same relative to the nominal before the feedback (s_post + dx).
+    pub s_prior: DVector<f64>,
+    /// Smoothed variances (diagonal of P_k|N).
+    pub var: DVector<f64>,
+}
+
+/// Why the backward pass cannot go on.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SmoothError(pub String);
+
+impl std::fmt::Display for SmoothError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for SmoothError {}
+
+struct Later {
+    phi: Option<DMatrix<f64>>,
+    p_prior: DMatrix<f64>,
+    s_prior: DVector<f64>,
+    p_smoothed: DMatrix<f64>,
+}
+
+/// Feed the records from the last to the first; each step returns that record's
+/// smoothed estimate.
+#[derive(Default)]
+pub struct RtsBackward {
+    later: Option<Later>,
+    /// Records where P^- had to be inverted by eigen-decomposition (not positive
+    /// definite in floating point).
+    pub pseudo_inverses: u64,
+}
+
+impl RtsBackward {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// One step back: record k after record k+1 (or the last record).
+    pub fn step(&mut self, rec: RtsRecord) -> Result<SmoothedRecord, SmoothError> {
+        let n = rec.dim();
+        let (s_post, p_smoothed) = match self.later.take() {
+            None => (DVector::zeros(n), rec.p_post.clone()),
+            Some(l) => {
+                if l.p_prior.nrows() != n {
+                    return Err(SmoothError(format!(
+                        "record at t = {:.3}: {n} states, the later record {}",
+                        rec.t,
+                        l.p_prior.nrows()
+                    )));
+                }
+                let phi_p = match &l.phi {
+                    Some(phi) => phi * &rec.p_post,
+                    None => rec.p_post.clone(),
+                };
+                // C^T = (P^-)^-1 Phi P^+.
+                let c_t = self.solve_spd(&l.p_prior, &phi_p);
+                let c = c_t.transpose();
+                let s_post = &c * &l.s_prior;
+                // Q = P^- - Phi P^+ Phi^T.
+                let phi_p_phi_t = match &l.phi {
+                    Some(phi) => &phi_p * phi.transpose(),
+                    None => phi_p,
+                };
+                let q_plus_ps = &l.p_prior - phi_p_phi_t + &l.p_smoothed;
+                let mut i_c_phi = match &l.phi {
+                    Some(phi) => -(&c * phi),
+                    None => -c.clone(),
+                };
+                for i in 0..n {
+                    i_c_phi[(i, i)] += 1.0;
+                }
+                let mut p =
+                    &i_c_phi * &rec.p_post * i_c_phi.transpose() + &c * q_plus_ps * c.transpose();
+                symmetrize(&mut p);
+                (s_post, p)
+            }
+        };
+        if !s_post.iter().all(|v| v.is_finite()) || !(0..n).all(|i| p_smoothed[(i, i)].is_finite())
+        {
+            return Err(SmoothError(format!(
+                "the smoothed estimate stopped being finite at t = {:.3}",
+                rec.t
+            )));
+        }
+        let s_prior = &s_post + &rec.dx;
+        let out = SmoothedRecord {
+            t: rec.t,
+            s_post,
+            s_prior: s_prior.clone(),
+            var: DVector::from_fn(n, |i, _| p_smoothed[(i, i)].max(0.0)),
+        };
+        let p_prior = match rec.p_prior {
+            Some(p) => p,
+            None => rec.p_post,
+        };
+        self.later = Some(Later {
+            phi: rec.phi,
+            p_prior,
+            s_prior,
+            p_smoothed,
+        });
+        Ok(out)
+    }
+
+    /// X with P X = B for a symmetric positive semi-definite P: states with zero
+    /// variance (not estimated) get zero rows; the rest are solved by Cholesky on
+    /// the correlation matrix (scaled to unit diagonal), or by eigen-decomposition
+    /// with small eigenvalues dropped when that fails.
+    fn solve_spd(&mut self, p: &DMatrix<f64>, b: &DMatrix<f64>) -> DMatrix<f64> {
+        let n = p.nrows();
+        let active: Vec<usize> = (0..n).filter(|&i| p[(i, i)] > 0.0).collect();
+        let m = active.len();
+        let mut out = DMatrix::zeros(n, b.ncols());
+        if m == 0 {
+            return out;
+        }
+        let d: Vec<f64> = active.iter().map(|&i| p[(i, i)].sqrt()).collect();
+        let r = DMatrix::from_fn(m, m, |a, c| p[(active[a], active[c])] / (d[a] * d[c]));
+        let rhs = DMatrix::from_fn(m, b.ncols(), |a, c| b[(active[a], c)] / d[a]);
+        let y = match r.clone().cholesky() {
+            Some(ch) => ch.solve(&rhs),
+            None => {
+                self.pseudo_inverses += 1;
+                let eig = r.symmetric_eigen();
+                let top = eig.eigenvalues.iter().cloned().fold(0.0, f64::max);
+                let inv = DVector::from_fn(m, |i, _| {
+                    let l = eig.eigenvalues[i];
+                    if l > 1e-12 * top {
+                        1.0 / l
+                    } else {
+                        0.0
+                    }
+                });
+                let v = &eig.eigenvectors;
+                v * DMatrix::from_diagonal(&inv) * v.transpose() * rhs
+            }
+        };
+        for (a, &i) in active.iter().enumerate() {
+            for c in 0..b.ncols() {
+                out[(i, c)] = y[(a, c)] / d[a];
+            }
+        }
+        out
+    }
+}
+
+fn symmetrize(p: &mut DMatrix<f64>) {
+    let n = p.nrows();
+    for i in 0..n {
+        for j in (i + 1)..n {
+            let a = 0.5 * (p[(i, j)] + p[(j, i)]);
+            p[(i, j)] = a;
+            p[(j, i)] = a;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A scalar random walk observed at both ends: the smoothed mid value and
+    /// variance have closed forms.
+    #[test]
+    fn scalar_random_walk_between_two_fixes() {
+        // x0 ~ N(0, 1) observed, then 10 steps of random walk q = 0.1 each, then a
+        // measurement with R = 1. Forward: P0+ = 0.5 (after z0 with R = 1).
+        let q = 0.1;
+        let r = 1.0;
+        let mut recs = Vec::new();
+        let mut p = 1.0;
+        // Record 0: update z0 = 0 at x prior 0 -> dx = 0.
+        let p0_post = p * r / (p + r);
+        recs.push(RtsRecord {
+            t: 0.0,
+            phi: None,
+            p_prior: Some(DMatrix::from_element(1, 1, p)),
+            p_post: DMatrix::from_element(1, 1, p0_post),
+            dx: DVector::zeros(1),
+        });
+        p = p0_post;
+        for k in 1..10 {
+            p += q;
+            recs.push(RtsRecord {
+                t: k as f64,
+                phi: Some(DMatrix::identity(1, 1)),
+                p_prior: None,
+                p_post: DMatrix::from_element(1, 1, p),
+                dx: DVector::zeros(1),
+            });
+        }
+        // Record 10: innovation y = x_est - z = 1 (z = -1), dx = K y.
+        p += q;
+        let k = p / (p + r);
+        let dx = k * 1.0;
+        recs.push(RtsRecord {
+            t: 10.0,
+            phi: Some(DMatrix::identity(1, 1)),
+            p_prior: Some(DMatrix::from_element(1, 1, p)),
+            p_post: DMatrix::from_element(1, 1, p * (1.0 - k)),
+            dx: DVector::from_element(1, dx),
+        });
+        let mut b = RtsBackward::new();
+        let out: Vec<_> = recs.into_iter().rev().map(|r| b.step(r).unwrap()).collect();
+        // Batch solution: the nominal (x_est) is 0 up to t = 10 before feedback;
+        // states x_k = x_0 + w; data z0 = 0 (R 1), z10 = -1 (R 1); prior x0 ~ N(0,1)
+        // is folded into the first update as in the filter. The smoothed value of x_0
+        // is the batch posterior: information form.
+        // Unknown x0, x10 = x0 + W (var 1.0): z0 = x0 + v0, z10 = x10 + v10, x0 prior N(0,1).
+        // Equivalent: x0 posterior after z0: N(0, 0.5); then z10 = x0 + W + v10 with
+        // var(W + v10) = 2.0: x0|all = 0.5 / (0.5 + 2.0) * (-1) = -0.2, var 0.5*2/2.5 = 0.4.
+        let s0 = &out[10];
+        // s = x_est - x_true estimate: x_est = 0, so x_true estimate = -s.
+        assert!((-s0.s_post[0] - (-0.2)).abs() < 1e-12, "{}", s0.s_post[0]);
+        assert!((s0.var[0] - 0.4).abs() < 1e-12, "{}", s0.var[0]);
+        // The last record's smoothed estimate is the filter's.
+        assert!(out[0].s_post[0].abs() < 1e-15);
+        // Variances never above the filter's.
+        for (o, k) in out.iter().zip((0..=10).rev()) {
+            let fwd = if k == 0 {
+                p0_post
+            } else {
+                (p0_post + q * k as f64).min(f64::MAX)
+            };
+            assert!(o.var[0] <= fwd + 1e-12, "k = {k}: {} > {fwd}", o.var[0]);
+        }
+    }
+
+    /// Zero-variance states (not estimated) do not break the solve.
+    #[test]
+    fn zero_variance_state_is_left_alone() {
+        let mut p = DMatrix::from_diagonal(&DVector::from_vec(vec![1.0, 0.0]));
+        let rec0 = RtsRecord {
+            t: 0.0,
+            phi: None,
+            p_prior: None,
+            p_post: p.clone(),
+            dx: DVector::zeros(2),
+        };
+        p[(0, 0)] = 2.0;
+        let rec1 = RtsRecord {
+            t: 1.0,
+            phi: Some(DMatrix::identity(2, 2)),
+            p_prior: Some(p.clone()),
+            p_post: DMatrix::from_diagonal(&DVector::from_vec(vec![1.0, 0.0])),
+            dx: DVector::from_vec(vec![0.5, 0.0]),
+        };
+        let mut b = RtsBackward::new();
+        b.step(rec1).unwrap();
+        let s = b.step(rec0).unwrap();
+        assert!((s.s_post[0] - 0.25).abs() < 1e-12);
+        assert_eq!(s.s_post[1], 0.0);
+        assert_eq!(b.pseudo_inverses, 0);
+    }
+}
