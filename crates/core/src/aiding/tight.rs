@@ -186,9 +186,15 @@ impl TightGnss {
                 .filter(|s| s.pseudorange_m.is_some())
                 .map(Aiding::Pseudorange)
                 .collect();
+            // Fewer than 4 pseudoranges do not fix the position: an epoch with them
+            // does not end a gap (after a blockage the single point fix brings the
+            // solution back as after an outage).
+            let full = rows.len() >= 4;
             if self.fuse_snooped(f, &rows, beyond_gate, |_, _, _| {}) {
                 used = true;
-                self.last_pr_used_t = Some(epoch.t);
+                if full {
+                    self.last_pr_used_t = Some(epoch.t);
+                }
             }
         }
         // The next TDCP interval starts from the attitude after all of this epoch's
