@@ -208,6 +208,13 @@ enum Command {
     /// max), IMU samples, seconds of data, wall time, the real-time factor and PASS/FAIL
     /// against the required 500x. The verdict does not set the exit status; fewer than
     /// 10 satellites per epoch on average is an error.
+    ///
+    /// With --smooth: the smoother on one simulated hour at 200 Hz (scenarios/
+    /// hour_200hz.toml, built in, with a barometer and receiver fixes) with every
+    /// vehicle state (odometer scale, mounting with the NHC, fix errors, barometer
+    /// bias, time offset and rate), output at the IMU rate: wall time and peak memory
+    /// of `navfuse run` without and with `--smooth`; PASS/FAIL against forward +
+    /// backward <= 2.5x forward alone and peak memory <= 300 MiB.
     Bench {
         /// KF-GINS YAML for the full run (default: ../shared/data/kf-gins/synthetic/kf-gins.yaml).
         #[arg(long, value_name = "FILE.yaml", conflicts_with = "tight")]
@@ -216,6 +223,9 @@ enum Command {
         /// 200 Hz IMU; requirement: at least 500x faster than real time).
         #[arg(long)]
         tight: bool,
+        /// Benchmark the smoother instead (one simulated hour at 200 Hz).
+        #[arg(long, conflicts_with_all = ["tight", "kf_gins"])]
+        smooth: bool,
         /// With --tight: seconds of data to simulate and navigate (at most the
         /// scenario's length, 1880 s for the built-in one).
         #[arg(long, value_name = "N", requires = "tight", default_value_t = navfuse_experiments::BENCH_TIGHT_DEFAULT_DURATION_S)]
@@ -284,6 +294,7 @@ fn main() -> ExitCode {
         Command::Bench {
             kf_gins,
             tight,
+            smooth,
             duration_s,
             scenario,
             repeat,
@@ -291,6 +302,7 @@ fn main() -> ExitCode {
         } => navfuse_experiments::bench(&navfuse_experiments::BenchArgs {
             kf_gins,
             tight,
+            smooth,
             duration_s,
             scenario,
             repeat,

@@ -164,7 +164,13 @@ impl Eskf {
 
 /// dst (+)= lhs * rhs (or lhs * rhs^T) via faer on zero-copy views of the
 /// column-major nalgebra storage (about 7x faster than nalgebra's gemm at 21x21).
-fn matmul(dst: &mut DMatrix<f64>, lhs: &DMatrix<f64>, rhs: &DMatrix<f64>, rhs_t: bool, add: bool) {
+pub(crate) fn matmul(
+    dst: &mut DMatrix<f64>,
+    lhs: &DMatrix<f64>,
+    rhs: &DMatrix<f64>,
+    rhs_t: bool,
+    add: bool,
+) {
     use faer::{linalg::matmul::matmul as fm, Accum, MatMut, MatRef, Par};
     let (m, n) = dst.shape();
     let l = MatRef::from_column_major_slice(lhs.as_slice(), lhs.nrows(), lhs.ncols());

@@ -63,6 +63,22 @@ pub struct BaroSpec {
     pub delay_s: f64,
 }
 
+impl Default for BaroSpec {
+    /// The defaults of a `[baro]` table with no keys.
+    fn default() -> Self {
+        BaroSpec {
+            rate_hz: default_rate(),
+            noise_std_m: default_noise(),
+            bias_m: default_bias(),
+            bias_drift_m_per_sqrth: default_drift(),
+            slow_amplitude_m: default_slow_amplitude(),
+            slow_period_s: default_slow_period(),
+            reference_pressure_pa: default_p_ref(),
+            delay_s: 0.0,
+        }
+    }
+}
+
 /// One simulated reading.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BaroReading {

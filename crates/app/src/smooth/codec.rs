@@ -88,7 +88,7 @@ pub(crate) fn put_record(e: &mut Enc, r: &RtsRecord) {
     let n = r.dim();
     e.f(r.t);
     e.u(n as u64);
-    e.u(u64::from(r.phi.is_some()) | u64::from(r.p_prior.is_some()) << 1);
+    e.u(u64::from(r.phi.is_some()) | u64::from(r.q.is_some()) << 1);
     if let Some(phi) = &r.phi {
         let nz: Vec<(usize, f64)> = phi
             .as_slice()
@@ -103,8 +103,18 @@ pub(crate) fn put_record(e: &mut Enc, r: &RtsRecord) {
             e.f(v);
         }
     }
-    if let Some(p) = &r.p_prior {
-        e.sym(p);
+    if let Some(q) = &r.q {
+        // Upper triangle, entries that are not zero.
+        let nz: Vec<(usize, f64)> = (0..n)
+            .flat_map(|j| (0..=j).map(move |i| (i, j)))
+            .filter(|&(i, j)| q[(i, j)] != 0.0)
+            .map(|(i, j)| (i + j * n, q[(i, j)]))
+            .collect();
+        e.u(nz.len() as u64);
+        for (k, v) in nz {
+            e.u(k as u64);
+            e.f(v);
+        }
     }
     e.sym(&r.p_post);
     e.fs(r.dx.iter());
@@ -127,15 +137,26 @@ pub(crate) fn get_record(b: &[u8]) -> std::io::Result<RtsRecord> {
     } else {
         None
     };
-    let p_prior = if flags & 2 != 0 {
-        Some(d.sym(n)?)
+    let q = if flags & 2 != 0 {
+        let mut q = DMatrix::zeros(n, n);
+        let nz = d.u()? as usize;
+        for _ in 0..nz {
+            let k = d.u()? as usize;
+            let v = d.f()?;
+            if k >= n * n {
+                return Err(short());
+            }
+            q[(k % n, k / n)] = v;
+            q[(k / n, k % n)] = v;
+        }
+        Some(q)
     } else {
         None
     };
     Ok(RtsRecord {
         t,
         phi,
-        p_prior,
+        q,
         p_post: d.sym(n)?,
         dx: d.vec(n)?,
     })
@@ -249,7 +270,7 @@ mod tests {
         let r = RtsRecord {
             t: 12.5,
             phi: Some(phi),
-            p_prior: Some(p.clone() * 2.0),
+            q: Some(&p * 2.0),
             p_post: p,
             dx: DVector::from_vec(vec![1.0, -2.0, 3.0, 0.5]),
         };
@@ -258,7 +279,7 @@ mod tests {
         assert_eq!(get_record(&e.0).unwrap(), r);
         let r2 = RtsRecord {
             phi: None,
-            p_prior: None,
+            q: None,
             ..r
         };
         e.clear();

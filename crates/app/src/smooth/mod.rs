@@ -34,8 +34,10 @@ pub struct SmootherReport {
     pub epochs: u64,
     /// Size of the scratch files \[bytes\].
     pub scratch_bytes: u64,
-    /// Wall time of the smoothing after the forward run \[s\].
+    /// Wall time of the smoothing after the forward run \[s\], and of its backward
+    /// pass alone.
     pub wall_s: f64,
+    pub backward_s: f64,
     /// RTS steps whose prior covariance needed an eigen-decomposition.
     pub pseudo_inverses: u64,
     /// Rows of the separation report, and how many are flagged.
@@ -56,6 +58,7 @@ impl SmootherReport {
             "epochs": self.epochs,
             "scratch_bytes": self.scratch_bytes,
             "wall_s": self.wall_s,
+            "backward_s": self.backward_s,
             "pseudo_inverses": self.pseudo_inverses,
             "separation_rows": self.separation_rows,
             "separation_flagged": self.separation_flagged,
@@ -312,6 +315,7 @@ impl ForwardLog {
         let mut smoothed = Spill::create(self.records_dir().as_deref().unwrap_or(&dir), "smoothed")
             .map_err(io_err("smoothed"))?;
         // Backward pass, last record first.
+        let t_back = Instant::now();
         let b = bar(progress, rep.records, "smoothing: backward pass");
         let mut back = RtsBackward::new();
         let mut rd = self.records.backward().map_err(io_err("records"))?;
@@ -336,6 +340,7 @@ impl ForwardLog {
             b.finish_and_clear();
         }
         rep.pseudo_inverses = back.pseudo_inverses;
+        rep.backward_s = t_back.elapsed().as_secs_f64();
         rep.scratch_bytes = self.records.bytes() + self.epochs.bytes() + smoothed.bytes();
         // Forward again: the epochs with the smoothed records in time order.
         let b = bar(progress, self.epochs.len(), "smoothing: output");

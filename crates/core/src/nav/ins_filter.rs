@@ -323,8 +323,8 @@ impl InsFilter {
     /// covariance brought up to date first): what re-admissions and gaps widen.
     pub(crate) fn widen(&mut self, block: usize, var: Vector3<f64>) {
         self.flush_covariance();
-        self.record(Transition::AddVariance);
         for k in 0..3 {
+            self.record(Transition::AddVariance(block + k, var[k]));
             self.filter.p[(block + k, block + k)] += var[k];
         }
     }
@@ -395,11 +395,8 @@ impl InsFilter {
             }
         }
         if let Some(r) = self.recorder.as_mut() {
-            r.transition(
-                self.nav.t,
-                Transition::Propagate(&self.disc.phi),
-                &self.filter.p,
-            );
+            let tr = Transition::Propagate(&self.disc.phi, &self.disc.qd);
+            r.transition(self.nav.t, tr, &self.filter.p);
         }
         self.filter.predict(&self.disc.phi, &self.disc.qd);
         if let Some(six) = self.six_state.as_mut() {
@@ -434,9 +431,6 @@ impl InsFilter {
             Some(_) => self.filter.gain(&lin.h, &lin.r),
             None => None,
         };
-        if let Some(r) = self.recorder.as_mut() {
-            r.before_update(&self.filter.p);
-        }
         let out = self.filter.update(&lin.y, &lin.h, &lin.r, gate);
         if let UpdateOutcome::Applied { dx, .. } = &out {
             if let Some(r) = self.recorder.as_mut() {
@@ -477,13 +471,13 @@ impl InsFilter {
 
     /// Add `var` to the variance of state `i` (covariance flushed by the caller).
     pub(crate) fn add_variance(&mut self, i: usize, var: f64) {
-        self.record(Transition::AddVariance);
+        self.record(Transition::AddVariance(i, var));
         self.filter.p[(i, i)] += var;
     }
 
     /// Re-initialise state `i`: uncorrelated, with variance `var`.
     pub(crate) fn reset_state(&mut self, i: usize, var: f64) {
-        self.record(Transition::Reset(i));
+        self.record(Transition::Reset(i, var));
         self.filter.reset_state(i, var);
     }
 

@@ -2,9 +2,9 @@
 //! covariance epoch (docs/ALGORITHMS.md "Smoothing").
 //!
 //! A record holds the transitions of the covariance since the previous record
-//! (propagation, added variance, state resets, composed into one Phi), the
-//! covariance before its updates, the covariance after them and the sum of the
-//! corrections they fed back. A record closes when the covariance moves on after an
+//! (propagation, added variance, state resets, composed into one Phi and one Q:
+//! P^- = Phi P_prev^+ Phi^T + Q), the covariance after its updates and the sum of
+//! the corrections they fed back. A record closes when the covariance moves on after an
 //! update or later in time; changes at one time are composed. So the covariance at
 //! an output epoch is the `p_post` of the record it belongs to.
 
@@ -18,8 +18,9 @@ pub struct RtsRecord {
     /// Transition from the previous record's updated error state to this record's
     /// prior one (`None`: identity; the first record has none).
     pub phi: Option<DMatrix<f64>>,
-    /// Covariance before this record's updates (`None`: no update, equal to `p_post`).
-    pub p_prior: Option<DMatrix<f64>>,
+    /// Noise added by the transition (`None`: zero): the covariance before this
+    /// record's updates is Phi P_prev^+ Phi^T + Q.
+    pub q: Option<DMatrix<f64>>,
     /// Covariance after this record's updates.
     pub p_post: DMatrix<f64>,
     /// Sum of the corrections fed back at this record (zero without an update).
@@ -30,26 +31,23 @@ impl RtsRecord {
     pub fn dim(&self) -> usize {
         self.p_post.nrows()
     }
-
-    pub fn p_prior(&self) -> &DMatrix<f64> {
-        self.p_prior.as_ref().unwrap_or(&self.p_post)
-    }
 }
 
 /// A change of the covariance that is not an update.
 pub(crate) enum Transition<'a> {
     /// P = Phi P Phi^T + Qd.
-    Propagate(&'a DMatrix<f64>),
-    /// Variance added to the diagonal (Phi = I).
-    AddVariance,
-    /// State `i` re-initialised: uncorrelated with the rest (row i of Phi is zero).
-    Reset(usize),
+    Propagate(&'a DMatrix<f64>, &'a DMatrix<f64>),
+    /// Variance `var` added to state `i` (Phi = I).
+    AddVariance(usize, f64),
+    /// State `i` re-initialised with variance `var`: uncorrelated with the rest (row
+    /// i of Phi is zero).
+    Reset(usize, f64),
 }
 
 struct Open {
     t: f64,
     phi: Option<DMatrix<f64>>,
-    p_prior: Option<DMatrix<f64>>,
+    q: Option<DMatrix<f64>>,
     dx: DVector<f64>,
     updated: bool,
 }
@@ -59,7 +57,7 @@ impl Open {
         Open {
             t,
             phi: None,
-            p_prior: None,
+            q: None,
             dx: DVector::zeros(n),
             updated: false,
         }
@@ -93,7 +91,7 @@ impl Recorder {
         self.closed.push(RtsRecord {
             t: open.t,
             phi: open.phi,
-            p_prior: if open.updated { open.p_prior } else { None },
+            q: open.q,
             p_post: p_now.clone(),
             dx: open.dx,
         });
@@ -107,28 +105,29 @@ impl Recorder {
         }
         let o = &mut self.open;
         o.t = t;
+        let n = p_now.nrows();
         match tr {
-            Transition::Propagate(phi) => {
+            Transition::Propagate(phi, qd) => {
+                // Composed: Q = Phi Q_before Phi^T + Qd.
+                o.q = Some(match o.q.take() {
+                    None => qd.clone(),
+                    Some(q) => phi * q * phi.transpose() + qd,
+                });
                 o.phi = Some(match o.phi.take() {
                     None => phi.clone(),
                     Some(acc) => phi * acc,
                 });
             }
-            Transition::AddVariance => {}
-            Transition::Reset(i) => {
-                let n = p_now.nrows();
+            Transition::AddVariance(i, var) => {
+                o.q.get_or_insert_with(|| DMatrix::zeros(n, n))[(i, i)] += var;
+            }
+            Transition::Reset(i, var) => {
                 let phi = o.phi.get_or_insert_with(|| DMatrix::identity(n, n));
                 phi.row_mut(i).fill(0.0);
-            }
-        }
-    }
-
-    /// Before an update attempt on the covariance `p_now`.
-    pub fn before_update(&mut self, p_now: &DMatrix<f64>) {
-        if !self.open.updated {
-            match self.open.p_prior.as_mut() {
-                Some(p) => p.copy_from(p_now),
-                None => self.open.p_prior = Some(p_now.clone()),
+                let q = o.q.get_or_insert_with(|| DMatrix::zeros(n, n));
+                q.row_mut(i).fill(0.0);
+                q.column_mut(i).fill(0.0);
+                q[(i, i)] = var;
             }
         }
     }

@@ -2,20 +2,22 @@
 //! closed-loop error-state filter (REFERENCES \[RTS65\], \[GRO13\] §3.4.2; the
 //! feedback resets as in docs/ALGORITHMS.md "Smoothing").
 //!
-//! Record k: prior covariance P_k^-, updated P_k^+, transition Phi_k from record
-//! k-1, correction dx_k fed back. Errors are taken relative to the forward nominal
+//! Record k: transition Phi_k from record k-1 and its noise Q_k (so the prior
+//! covariance is P_k^- = Phi_k P_{k-1}^+ Phi_k^T + Q_k), updated covariance P_k^+,
+//! correction dx_k fed back. Errors are taken relative to the forward nominal
 //! after feedback, where the filter's own estimate is zero, so with
 //! s_k^- = s_k^+ + dx_k (the same error relative to the nominal before feedback):
 //!
 //!   C_k     = P_k^+ Phi_{k+1}^T (P_{k+1}^-)^-1
 //!   s_k^+   = C_k s_{k+1}^-                       (s_N^+ = 0)
 //!   P_k|N   = (I - C_k Phi_{k+1}) P_k^+ (I - C_k Phi_{k+1})^T
-//!             + C_k (Q_{k+1} + P_{k+1|N}) C_k^T,  Q_{k+1} = P_{k+1}^- - Phi P_k^+ Phi^T
+//!             + C_k (Q_{k+1} + P_{k+1|N}) C_k^T
 //!
 //! The covariance line is the Joseph-like form of P_k^+ + C_k (P_{k+1|N} -
 //! P_{k+1}^-) C_k^T: a sum of positive semi-definite terms, symmetrised.
 
 use super::record::RtsRecord;
+use crate::filter::matmul;
 use nalgebra::{DMatrix, DVector};
 
 /// The smoothed error estimate at one record.
@@ -45,7 +47,7 @@ impl std::error::Error for SmoothError {}
 
 struct Later {
     phi: Option<DMatrix<f64>>,
-    p_prior: DMatrix<f64>,
+    q: Option<DMatrix<f64>>,
     s_prior: DVector<f64>,
     p_smoothed: DMatrix<f64>,
 }
@@ -60,6 +62,15 @@ pub struct RtsBackward {
     pub pseudo_inverses: u64,
 }
 
+/// a * b (or a * b^T) into a new matrix (faer, filter.rs).
+fn mul(a: &DMatrix<f64>, b: &DMatrix<f64>, b_t: bool) -> DMatrix<f64> {
+    let rows = a.nrows();
+    let cols = if b_t { b.nrows() } else { b.ncols() };
+    let mut out = DMatrix::zeros(rows, cols);
+    matmul(&mut out, a, b, b_t, false);
+    out
+}
+
 impl RtsBackward {
     pub fn new() -> Self {
         Self::default()
@@ -71,36 +82,43 @@ impl RtsBackward {
         let (s_post, p_smoothed) = match self.later.take() {
             None => (DVector::zeros(n), rec.p_post.clone()),
             Some(l) => {
-                if l.p_prior.nrows() != n {
+                if l.p_smoothed.nrows() != n {
                     return Err(SmoothError(format!(
                         "record at t = {:.3}: {n} states, the later record {}",
                         rec.t,
-                        l.p_prior.nrows()
+                        l.p_smoothed.nrows()
                     )));
                 }
                 let phi_p = match &l.phi {
-                    Some(phi) => phi * &rec.p_post,
+                    Some(phi) => mul(phi, &rec.p_post, false),
                     None => rec.p_post.clone(),
                 };
-                // C^T = (P^-)^-1 Phi P^+.
-                let c_t = self.solve_spd(&l.p_prior, &phi_p);
-                let c = c_t.transpose();
-                let s_post = &c * &l.s_prior;
-                // Q = P^- - Phi P^+ Phi^T.
-                let phi_p_phi_t = match &l.phi {
-                    Some(phi) => &phi_p * phi.transpose(),
-                    None => phi_p,
+                // P^- = Phi P^+ Phi^T + Q.
+                let mut p_prior = match &l.phi {
+                    Some(phi) => mul(&phi_p, phi, true),
+                    None => phi_p.clone(),
                 };
-                let q_plus_ps = &l.p_prior - phi_p_phi_t + &l.p_smoothed;
+                if let Some(q) = &l.q {
+                    p_prior += q;
+                }
+                // C^T = (P^-)^-1 Phi P^+.
+                let c = self.solve_spd(&p_prior, &phi_p).transpose();
+                let s_post = &c * &l.s_prior;
+                let mut q_plus_ps = l.p_smoothed;
+                if let Some(q) = &l.q {
+                    q_plus_ps += q;
+                }
                 let mut i_c_phi = match &l.phi {
-                    Some(phi) => -(&c * phi),
+                    Some(phi) => -mul(&c, phi, false),
                     None => -c.clone(),
                 };
                 for i in 0..n {
                     i_c_phi[(i, i)] += 1.0;
                 }
-                let mut p =
-                    &i_c_phi * &rec.p_post * i_c_phi.transpose() + &c * q_plus_ps * c.transpose();
+                let a = mul(&i_c_phi, &rec.p_post, false);
+                let mut p = mul(&a, &i_c_phi, true);
+                let cq = mul(&c, &q_plus_ps, false);
+                matmul(&mut p, &cq, &c, true, true);
                 symmetrize(&mut p);
                 (s_post, p)
             }
@@ -119,13 +137,9 @@ impl RtsBackward {
             s_prior: s_prior.clone(),
             var: DVector::from_fn(n, |i, _| p_smoothed[(i, i)].max(0.0)),
         };
-        let p_prior = match rec.p_prior {
-            Some(p) => p,
-            None => rec.p_post,
-        };
         self.later = Some(Later {
             phi: rec.phi,
-            p_prior,
+            q: rec.q,
             s_prior,
             p_smoothed,
         });
@@ -204,7 +218,7 @@ mod tests {
         recs.push(RtsRecord {
             t: 0.0,
             phi: None,
-            p_prior: Some(DMatrix::from_element(1, 1, p)),
+            q: None,
             p_post: DMatrix::from_element(1, 1, p0_post),
             dx: DVector::zeros(1),
         });
@@ -214,7 +228,7 @@ mod tests {
             recs.push(RtsRecord {
                 t: k as f64,
                 phi: Some(DMatrix::identity(1, 1)),
-                p_prior: None,
+                q: Some(DMatrix::from_element(1, 1, q)),
                 p_post: DMatrix::from_element(1, 1, p),
                 dx: DVector::zeros(1),
             });
@@ -226,7 +240,7 @@ mod tests {
         recs.push(RtsRecord {
             t: 10.0,
             phi: Some(DMatrix::identity(1, 1)),
-            p_prior: Some(DMatrix::from_element(1, 1, p)),
+            q: Some(DMatrix::from_element(1, 1, q)),
             p_post: DMatrix::from_element(1, 1, p * (1.0 - k)),
             dx: DVector::from_element(1, dx),
         });
@@ -263,7 +277,7 @@ mod tests {
         let rec0 = RtsRecord {
             t: 0.0,
             phi: None,
-            p_prior: None,
+            q: None,
             p_post: p.clone(),
             dx: DVector::zeros(2),
         };
@@ -271,7 +285,7 @@ mod tests {
         let rec1 = RtsRecord {
             t: 1.0,
             phi: Some(DMatrix::identity(2, 2)),
-            p_prior: Some(p.clone()),
+            q: Some(DMatrix::from_diagonal(&DVector::from_vec(vec![1.0, 0.0]))),
             p_post: DMatrix::from_diagonal(&DVector::from_vec(vec![1.0, 0.0])),
             dx: DVector::from_vec(vec![0.5, 0.0]),
         };
