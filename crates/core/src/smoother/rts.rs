@@ -46,7 +46,8 @@ impl std::fmt::Display for SmoothError {
 impl std::error::Error for SmoothError {}
 
 struct Later {
-    phi: Option<DMatrix<f64>>,
+    /// Phi - I (empty: identity).
+    phi: Vec<(usize, usize, f64)>,
     q: Option<DMatrix<f64>>,
     s_prior: DVector<f64>,
     p_smoothed: DMatrix<f64>,
@@ -60,6 +61,55 @@ pub struct RtsBackward {
     /// Records where P^- had to be inverted by eigen-decomposition (not positive
     /// definite in floating point).
     pub pseudo_inverses: u64,
+}
+
+/// Phi - I as its entries that are not zero: (row, column, value). Phi is mostly
+/// the identity (the INS error dynamics couple few states per step).
+fn off_identity(phi: &DMatrix<f64>) -> Vec<(usize, usize, f64)> {
+    let n = phi.nrows();
+    let mut e = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            let v = phi[(i, j)] - if i == j { 1.0 } else { 0.0 };
+            if v != 0.0 {
+                e.push((i, j, v));
+            }
+        }
+    }
+    e
+}
+
+/// Phi * a with Phi = I + E.
+fn phi_mul(e: &[(usize, usize, f64)], a: &DMatrix<f64>) -> DMatrix<f64> {
+    let mut out = a.clone();
+    for &(i, j, v) in e {
+        for c in 0..a.ncols() {
+            out[(i, c)] += v * a[(j, c)];
+        }
+    }
+    out
+}
+
+/// a * Phi^T with Phi = I + E.
+fn mul_phi_t(a: &DMatrix<f64>, e: &[(usize, usize, f64)]) -> DMatrix<f64> {
+    let mut out = a.clone();
+    for &(i, j, v) in e {
+        for r in 0..a.nrows() {
+            out[(r, i)] += v * a[(r, j)];
+        }
+    }
+    out
+}
+
+/// a * Phi with Phi = I + E.
+fn mul_phi(a: &DMatrix<f64>, e: &[(usize, usize, f64)]) -> DMatrix<f64> {
+    let mut out = a.clone();
+    for &(i, j, v) in e {
+        for r in 0..a.nrows() {
+            out[(r, j)] += v * a[(r, i)];
+        }
+    }
+    out
 }
 
 /// a * b (or a * b^T) into a new matrix (faer, filter.rs).
@@ -89,15 +139,9 @@ impl RtsBackward {
                         l.p_smoothed.nrows()
                     )));
                 }
-                let phi_p = match &l.phi {
-                    Some(phi) => mul(phi, &rec.p_post, false),
-                    None => rec.p_post.clone(),
-                };
+                let phi_p = phi_mul(&l.phi, &rec.p_post);
                 // P^- = Phi P^+ Phi^T + Q.
-                let mut p_prior = match &l.phi {
-                    Some(phi) => mul(&phi_p, phi, true),
-                    None => phi_p.clone(),
-                };
+                let mut p_prior = mul_phi_t(&phi_p, &l.phi);
                 if let Some(q) = &l.q {
                     p_prior += q;
                 }
@@ -108,10 +152,7 @@ impl RtsBackward {
                 if let Some(q) = &l.q {
                     q_plus_ps += q;
                 }
-                let mut i_c_phi = match &l.phi {
-                    Some(phi) => -mul(&c, phi, false),
-                    None => -c.clone(),
-                };
+                let mut i_c_phi = -mul_phi(&c, &l.phi);
                 for i in 0..n {
                     i_c_phi[(i, i)] += 1.0;
                 }
@@ -138,7 +179,7 @@ impl RtsBackward {
             var: DVector::from_fn(n, |i, _| p_smoothed[(i, i)].max(0.0)),
         };
         self.later = Some(Later {
-            phi: rec.phi,
+            phi: rec.phi.as_ref().map(off_identity).unwrap_or_default(),
             q: rec.q,
             s_prior,
             p_smoothed,
@@ -161,8 +202,8 @@ impl RtsBackward {
         let d: Vec<f64> = active.iter().map(|&i| p[(i, i)].sqrt()).collect();
         let r = DMatrix::from_fn(m, m, |a, c| p[(active[a], active[c])] / (d[a] * d[c]));
         let rhs = DMatrix::from_fn(m, b.ncols(), |a, c| b[(active[a], c)] / d[a]);
-        let y = match r.clone().cholesky() {
-            Some(ch) => ch.solve(&rhs),
+        let y = match llt_solve(&r, &rhs) {
+            Some(y) => y,
             None => {
                 self.pseudo_inverses += 1;
                 let eig = r.symmetric_eigen();
@@ -186,6 +227,24 @@ impl RtsBackward {
         }
         out
     }
+}
+
+/// r x = rhs for a symmetric positive definite r (faer's Cholesky); None when r is
+/// not positive definite.
+fn llt_solve(r: &DMatrix<f64>, rhs: &DMatrix<f64>) -> Option<DMatrix<f64>> {
+    use faer::linalg::solvers::SolveCore;
+    use faer::{Conj, MatMut, MatRef, Side};
+    let m = r.nrows();
+    let l = MatRef::from_column_major_slice(r.as_slice(), m, m)
+        .llt(Side::Lower)
+        .ok()?;
+    let mut y = rhs.clone();
+    let k = y.ncols();
+    l.solve_in_place_with_conj(
+        Conj::No,
+        MatMut::from_column_major_slice_mut(y.as_mut_slice(), m, k),
+    );
+    Some(y)
 }
 
 fn symmetrize(p: &mut DMatrix<f64>) {

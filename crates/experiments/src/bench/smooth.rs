@@ -54,10 +54,8 @@ pub fn main(repeat: usize, json_out: bool) -> Result<()> {
         file,
         "barometer added; GNSS as receiver fixes only (no raw GNSS, heading, DGPS)",
     )?;
-    let scratch = Scratch(std::env::temp_dir().join(format!(
-        "navfuse-bench-smooth-{}",
-        std::process::id()
-    )));
+    let scratch =
+        Scratch(std::env::temp_dir().join(format!("navfuse-bench-smooth-{}", std::process::id())));
     let sim_dir = scratch.0.join("sim");
     generate(&sc, &sim_dir)?;
     let mut cfg = navfuse_io::config::load(&sim_dir.join("run.toml"))?;
@@ -98,7 +96,10 @@ pub fn main(repeat: usize, json_out: bool) -> Result<()> {
     };
     let (fwd_s, fwd_peak, fwd_job) = measure(false)?;
     let (sm_s, sm_peak, sm_job) = measure(true)?;
-    let rep = sm_job.smoother.clone().context("the smoothed run has no smoother report")?;
+    let rep = sm_job
+        .smoother
+        .clone()
+        .context("the smoothed run has no smoother report")?;
     let states = sm_job.summary.source_states.len();
     let ratio = sm_s / fwd_s;
     let mib = |k: Option<u64>| k.map(|k| k as f64 / 1024.0);
