@@ -14,6 +14,7 @@ use crate::earth::{lla_add_ned, lla_to_ecef};
 use crate::error_model::{fill_f, fill_qc, Discretizer, MeanMotion};
 use crate::filter::{Eskf, UpdateOutcome};
 use crate::mechanization::Mechanizer;
+use crate::nav::timeline::TimeDirection;
 use crate::six_state::SixState;
 use crate::state::{Block, StateLayout, ATT, BA, BG, N_INS, POS, SA, SG, VEL};
 use crate::types::{ImuErrors, ImuSample, NavState};
@@ -95,6 +96,9 @@ pub struct InsFilter {
     /// and the output solution built from it; this filter is then a dead reckoning.
     pub(crate) six_state: Option<SixState>,
     pub(crate) six_state_out: NavState,
+    /// Which way the run goes in time (nav/backward.rs: backward, the IMU pieces
+    /// come time-reversed, dt < 0).
+    pub(crate) direction: TimeDirection,
 }
 
 /// What an update applied.
@@ -243,6 +247,7 @@ impl InsFilter {
             random_walks: Vec::new(),
             displacement: track_displacement.then(|| (Vector3::zeros(), lla_to_ecef(&lla))),
             corrections: 0,
+            direction: TimeDirection::Forward,
         }
     }
 
@@ -273,7 +278,9 @@ impl InsFilter {
         self.nav.t - self.time_offset_s
     }
 
-    /// Advance over one raw IMU interval; returns the compensated sample.
+    /// Advance over one raw IMU interval; returns the compensated sample. Backward
+    /// the interval comes time-reversed (timeline::ReverseRest: dt < 0, increments
+    /// negated), and so do the compensated sample, the sums and the accumulated span.
     pub(crate) fn propagate(&mut self, raw: &ImuSample) -> ImuSample {
         let sum = &mut self.integrated;
         *sum = (sum.0 + raw.dt, sum.1 + raw.dtheta, sum.2 + raw.dvel);
@@ -290,7 +297,7 @@ impl InsFilter {
             *d += r - *last;
             *last = r;
         }
-        if s.dt > 0.0 {
+        if s.dt != 0.0 {
             self.w_ib_b = s.dtheta / s.dt;
             self.a_n = (self.nav.v_n - v_before) / s.dt;
         }
@@ -298,7 +305,7 @@ impl InsFilter {
         self.acc.dv_f_n += info.dv_f_n;
         self.acc.dtheta += s.dtheta;
         self.acc.dvel += s.dvel;
-        if self.acc.dt >= self.cfg.filter.covariance_period_s - 1e-9 {
+        if self.acc.dt.abs() >= self.cfg.filter.covariance_period_s - 1e-9 {
             self.flush_covariance();
         }
         self.six_state_follow_dr();
@@ -326,7 +333,7 @@ impl InsFilter {
     /// Propagate the covariance over the accumulated span (REFERENCES \[SYS\] §2).
     pub(crate) fn flush_covariance(&mut self) {
         let a = self.acc;
-        if a.dt <= 0.0 {
+        if a.dt == 0.0 {
             return;
         }
         let mm = MeanMotion {
@@ -369,19 +376,23 @@ impl InsFilter {
                     self.disc.f[(i + k, i + k)] = -1.0 / tau;
                     self.disc.qc[(i + k, i + k)] = 2.0 * sigma[k].powi(2) / tau;
                 }
-                let e = (-a.dt / tau).exp();
+                let e = (-a.dt.abs() / tau).exp();
                 for k in 0..sb.block.len() {
                     self.extra[i + k] *= e;
                 }
             }
         }
         self.disc.discretize(a.dt);
+        if a.dt < 0.0 {
+            // Backward: the IMU errors' Gauss-Markov rows decay with |dt|.
+            self.disc.reverse_gauss_markov(BG..SA + 3, a.dt);
+        }
         for sb in &self.source_blocks {
             if let Some(BlockProcess::GaussMarkov { corr_time_s, sigma }) = &sb.process {
                 // Exact discretisation (a long span, e.g. a bridged IMU gap, must not
                 // take Phi below zero).
                 let (i, tau) = (sb.index, *corr_time_s);
-                let e = (-a.dt / tau).exp();
+                let e = (-a.dt.abs() / tau).exp();
                 for k in 0..sb.block.len() {
                     self.disc.phi[(i + k, i + k)] = e;
                     self.disc.qd[(i + k, i + k)] = sigma[k].powi(2) * (1.0 - e * e);

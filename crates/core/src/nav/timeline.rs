@@ -73,6 +73,127 @@ impl IntervalRest {
     }
 }
 
+/// Which way a run goes in time: forward (increasing t) or backward (the
+/// time-reversed run of post-processing, nav/backward.rs). The sources measure
+/// elapsed time and schedule their cadence with it, so that the same policy works
+/// both ways; forward every helper is the plain expression it replaces.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum TimeDirection {
+    #[default]
+    Forward,
+    Backward,
+}
+
+impl TimeDirection {
+    /// Time elapsed along the run from `since` to `now` \[s\]: `now - since` forward,
+    /// `since - now` backward (positive when `now` comes later in the run).
+    #[inline]
+    pub fn elapsed(self, since: f64, now: f64) -> f64 {
+        match self {
+            TimeDirection::Forward => now - since,
+            TimeDirection::Backward => since - now,
+        }
+    }
+
+    /// `t` moved by the duration `d` along the run: `t + d` forward, `t - d` backward.
+    #[inline]
+    pub fn advance(self, t: f64, d: f64) -> f64 {
+        match self {
+            TimeDirection::Forward => t + d,
+            TimeDirection::Backward => t - d,
+        }
+    }
+
+    /// `t` has reached `due` (within `tol` \[s\]) along the run: `t >= due - tol`
+    /// forward, `t <= due + tol` backward.
+    #[inline]
+    pub fn reached(self, t: f64, due: f64, tol: f64) -> bool {
+        match self {
+            TimeDirection::Forward => t >= due - tol,
+            TimeDirection::Backward => t <= due + tol,
+        }
+    }
+
+    pub fn is_backward(self) -> bool {
+        self == TimeDirection::Backward
+    }
+}
+
+/// The part of one IMU interval (t_k - dt, t_k] not yet integrated by a backward
+/// run, which goes from t_k down to t_k - dt: (t_k - dt, t_reached]. The pieces it
+/// hands out are in the time-reversed form the backward mechanization takes
+/// (nav/backward.rs): `t` the time the piece ends at (its lower end), `dt` < 0 and
+/// the increments negated, so that t - dt is where the piece starts.
+#[derive(Clone, Copy, Debug)]
+pub struct ReverseRest {
+    /// Lower end of the interval, t_k - dt.
+    lower: f64,
+    /// Time integrated down to so far.
+    reached: f64,
+    /// What is left, positive: length, angle and velocity increments.
+    dt: f64,
+    dtheta: nalgebra::Vector3<f64>,
+    dvel: nalgebra::Vector3<f64>,
+}
+
+impl ReverseRest {
+    pub fn new(sample: ImuSample) -> Self {
+        ReverseRest {
+            lower: sample.t - sample.dt,
+            reached: sample.t,
+            dt: sample.dt,
+            dtheta: sample.dtheta,
+            dvel: sample.dvel,
+        }
+    }
+
+    /// Time down to which the interval has been integrated \[s\].
+    pub fn t_reached(&self) -> f64 {
+        self.reached
+    }
+
+    /// The piece to integrate (backward) to reach `t` (the whole rest when `t` is at or
+    /// before the interval's lower end); `None` when `t` is not below the time
+    /// reached. The mirror of [`IntervalRest::cut_until`].
+    pub fn cut_until(&mut self, t: f64) -> Option<ImuSample> {
+        if self.dt <= 0.0 || t >= self.reached - SNAP_S {
+            return None;
+        }
+        if t <= self.lower + SNAP_S {
+            return self.take_rest();
+        }
+        // Linear share of the increments (constant rate inside the interval).
+        let lambda = (self.reached - t) / self.dt;
+        let (dt, dtheta, dvel) = (self.dt * lambda, self.dtheta * lambda, self.dvel * lambda);
+        self.reached = t;
+        self.dt -= dt;
+        self.dtheta -= dtheta;
+        self.dvel -= dvel;
+        Some(ImuSample {
+            t,
+            dt: -dt,
+            dtheta: -dtheta,
+            dvel: -dvel,
+        })
+    }
+
+    /// Whatever is left of the interval (down to its lower end); afterwards nothing is.
+    pub fn take_rest(&mut self) -> Option<ImuSample> {
+        let piece = ImuSample {
+            t: self.lower,
+            dt: -self.dt,
+            dtheta: -self.dtheta,
+            dvel: -self.dvel,
+        };
+        let any = self.dt > 0.0;
+        self.reached = self.lower;
+        self.dt = 0.0;
+        self.dtheta = Default::default();
+        self.dvel = Default::default();
+        any.then_some(piece)
+    }
+}
+
 /// What the inbox hands over next.
 #[derive(Debug)]
 pub enum Due<'a> {
@@ -129,6 +250,55 @@ impl<'a> Inbox<'a> {
             return None;
         }
         self.next += 1;
+        if m.on_gnss_clock() && self.outages.contains(m.t()) {
+            return Some(Due::Withheld(m));
+        }
+        Some(Due::Apply { m, t_eff })
+    }
+}
+
+/// The time-sorted measurements handed over from the last to the first as a
+/// backward run reaches them: the mirror of [`Inbox`]. At equal times they come in
+/// the reverse of the merged order; a GNSS-clock time is shifted by the offset as
+/// forward; GNSS outages withhold the same inputs.
+#[derive(Debug)]
+pub struct ReverseInbox<'a> {
+    meas: &'a [Measurement],
+    /// One past the next measurement to hand over (counting down).
+    next: usize,
+    outages: &'a OutageSchedule,
+}
+
+impl<'a> ReverseInbox<'a> {
+    pub fn new(meas: &'a [Measurement], outages: &'a OutageSchedule) -> Self {
+        ReverseInbox {
+            meas,
+            next: meas.len(),
+            outages,
+        }
+    }
+
+    /// Drop the trailing measurements for which `unused` holds; returns them.
+    pub fn skip_while(
+        &mut self,
+        mut unused: impl FnMut(&Measurement) -> bool,
+    ) -> &'a [Measurement] {
+        let last = self.next;
+        while self.next > 0 && unused(&self.meas[self.next - 1]) {
+            self.next -= 1;
+        }
+        &self.meas[self.next..last]
+    }
+
+    /// The next (latest remaining) measurement whose effective time is at or after
+    /// `t_low`, the lower end of the interval being integrated.
+    pub fn next_due(&mut self, t_low: f64, time_offset_s: f64) -> Option<Due<'a>> {
+        let m = self.meas.get(self.next.checked_sub(1)?)?;
+        let t_eff = effective_time(m, time_offset_s);
+        if t_eff < t_low {
+            return None;
+        }
+        self.next -= 1;
         if m.on_gnss_clock() && self.outages.contains(m.t()) {
             return Some(Due::Withheld(m));
         }
