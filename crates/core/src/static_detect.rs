@@ -43,7 +43,7 @@ impl StaticDetector {
     /// In a backward run the interval is time-reversed: `dt` < 0, it starts at
     /// t - dt > t (the window then reaches from the latest sample's upper end down).
     pub fn push(&mut self, t: f64, dt: f64, f_b: &Vector3<f64>, w_b: &Vector3<f64>) {
-        if !(dt > 0.0 || dt < 0.0) {
+        if dt == 0.0 {
             return;
         }
         self.samples.push_back((t, dt, *f_b, *w_b));

@@ -50,7 +50,7 @@ pub fn linearize(
     let dt = interval.dt_s;
     // dt < 0 in a backward run (the previous epoch is the later one): z, the
     // prediction and H are mean rates over the signed interval, the same model.
-    if !(dt > 0.0 || dt < 0.0) {
+    if dt == 0.0 {
         return None;
     }
     let (r_ant, c_ne, h_pos) = antenna_ecef(ctx);

@@ -19,6 +19,9 @@ use crate::types::{ImuErrors, ImuSample, Measurement, NavState};
 use nalgebra::{UnitQuaternion, Vector3};
 use std::sync::{Arc, Mutex};
 
+/// Sinusoids (amplitude, angular frequency, phase) plus a constant.
+type Signal<'a> = (&'a [(f64, f64, f64)], f64);
+
 /// Exact integral over (t0, t1] of sum_k a_k sin(w_k t + p_k) + c.
 fn integral(terms: &[(f64, f64, f64)], c: f64, t0: f64, t1: f64) -> f64 {
     terms
@@ -32,12 +35,12 @@ fn integral(terms: &[(f64, f64, f64)], c: f64, t0: f64, t1: f64) -> f64 {
 /// specific force (accelerating and braking, lateral force), increments integrated
 /// exactly over each interval of `dt` from `t0`.
 fn manoeuvring_imu(t0: f64, dt: f64, n: usize) -> Vec<ImuSample> {
-    let w: [(&[(f64, f64, f64)], f64); 3] = [
+    let w: [Signal; 3] = [
         (&[(0.10, 0.50, 0.3), (0.03, 1.70, 1.0)], 1e-5),
         (&[(0.05, 0.30, 1.1), (0.02, 2.30, 0.2)], -2e-5),
         (&[(0.20, 0.10, 0.0), (0.05, 0.90, 2.0)], 4e-5),
     ];
-    let f: [(&[(f64, f64, f64)], f64); 3] = [
+    let f: [Signal; 3] = [
         (&[(1.0, 0.20, 0.0), (0.3, 3.10, 0.5)], 0.2),
         (&[(0.5, 0.40, 1.0), (0.2, 2.70, 0.1)], 0.0),
         (&[(0.2, 1.00, 0.7), (0.1, 5.30, 0.4)], -9.806),
@@ -266,7 +269,7 @@ fn backward_run_without_aiding_returns_to_the_forward_start() {
         let s = imu[imu.len() - 1 - k];
         assert!((t - (s.t - s.dt)).abs() < 1e-9, "output {k} at {t}");
     }
-    assert_eq!(summary.imu_samples as usize, imu.len());
+    assert_eq!(summary.imu_samples, imu.len());
     // Every increment once (negated: integrated time-reversed).
     let (sum_dt, sum_th, sum_dv) = integrated.unwrap();
     let total = imu

@@ -258,9 +258,10 @@ impl<'a> Inbox<'a> {
 }
 
 /// The time-sorted measurements handed over from the last to the first as a
-/// backward run reaches them: the mirror of [`Inbox`]. At equal times they come in
-/// the reverse of the merged order; a GNSS-clock time is shifted by the offset as
-/// forward; GNSS outages withhold the same inputs.
+/// backward run reaches them: the mirror of [`Inbox`]. They come in the reverse of
+/// the merged order (at equal times too); a GNSS-clock time is shifted by the offset
+/// as forward (one that the offset puts above an input listed after it waits for
+/// that one, as forward the other way round); GNSS outages withhold the same inputs.
 #[derive(Debug)]
 pub struct ReverseInbox<'a> {
     meas: &'a [Measurement],
@@ -443,5 +444,118 @@ mod tests {
         let mut inbox = Inbox::new(&meas, &outages);
         assert_eq!(inbox.skip_while(|m| m.t() <= 1.0).len(), 2);
         assert!(matches!(inbox.next_due(10.0, 0.0), Some(Due::Withheld(_))));
+    }
+
+    /// The backward mirror: cuts at random times going down; the pieces (time-reversed:
+    /// dt < 0, increments negated) add up to the interval negated, each ends below the
+    /// previous one, the last at the interval's lower end.
+    #[test]
+    fn reverse_pieces_add_up_to_the_interval() {
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(16);
+        for _ in 0..20_000 {
+            let dt = 0.005;
+            let s = sample(100.0 + dt, dt);
+            let t0 = s.t - s.dt;
+            let mut times: Vec<f64> = (0..rng.random_range(0..6))
+                .map(|_| match rng.random_range(0..5) {
+                    0 => t0,
+                    1 => s.t,
+                    2 => s.t - 10f64.powf(rng.random_range(-12.0..-6.0)),
+                    3 => {
+                        t0 + if rng.random() { 1.0 } else { -1.0 }
+                            * 10f64.powf(rng.random_range(-12.0..-6.0))
+                    }
+                    _ => t0 + rng.random::<f64>() * dt,
+                })
+                .collect();
+            if rng.random() {
+                times.extend(times.clone());
+            }
+            times.sort_by(|a, b| b.total_cmp(a));
+            let mut rest = ReverseRest::new(s);
+            let mut sum = (0.0, Vector3::zeros(), Vector3::zeros());
+            let mut t_prev = s.t;
+            for &t in &times {
+                if let Some(p) = rest.cut_until(t) {
+                    assert!(p.dt < 0.0 && p.t < t_prev && p.t >= t0, "{times:?}");
+                    assert!((p.t - p.dt - t_prev).abs() < 1e-12);
+                    t_prev = p.t;
+                    sum = (sum.0 + p.dt, sum.1 + p.dtheta, sum.2 + p.dvel);
+                }
+            }
+            if let Some(p) = rest.take_rest() {
+                assert_eq!(p.t, t0);
+                sum = (sum.0 + p.dt, sum.1 + p.dtheta, sum.2 + p.dvel);
+            }
+            assert_eq!(rest.t_reached(), t0);
+            assert!(rest.take_rest().is_none() && rest.cut_until(t0 - 1.0).is_none());
+            assert!(
+                (sum.0 + s.dt).abs() <= 4.0 * f64::EPSILON * s.dt,
+                "{times:?}"
+            );
+            assert!((sum.1 + s.dtheta).norm() <= 8.0 * f64::EPSILON * s.dtheta.norm());
+            assert!((sum.2 + s.dvel).norm() <= 8.0 * f64::EPSILON * s.dvel.norm());
+        }
+    }
+
+    /// The reverse inbox: from the last measurement down, GNSS-clock inputs due at
+    /// t + offset, outages withheld, the trailing ones skipped.
+    #[test]
+    fn reverse_inbox_hands_over_from_the_end() {
+        use crate::outage::Window;
+        use crate::types::{GnssFix, OdometerSample};
+        let fix = |t: f64| GnssFix {
+            t,
+            lla: Vector3::zeros(),
+            std_ned: Vector3::repeat(1.0),
+            vel_ned: None,
+            vel_std_ned: None,
+        };
+        let odo = |t: f64| OdometerSample {
+            t,
+            speed_mps: 1.0,
+            interval_s: 0.0,
+        };
+        let meas = crate::types::merge_measurements(
+            &[fix(1.0), fix(2.0), fix(3.0), fix(4.0)],
+            &[odo(1.0), odo(2.0)],
+            &[],
+        );
+        let outages = OutageSchedule {
+            windows: vec![Window {
+                start: 1.5,
+                end: 2.5,
+            }],
+            periodic: Vec::new(),
+        };
+        let mut inbox = ReverseInbox::new(&meas, &outages);
+        assert_eq!(inbox.skip_while(|m| m.t() >= 4.0).len(), 1);
+        let offset = 0.2;
+        let due_down_to = |t_low: f64, inbox: &mut ReverseInbox| {
+            let mut got = Vec::new();
+            while let Some(d) = inbox.next_due(t_low, offset) {
+                got.push(match d {
+                    Due::Apply { m, t_eff } => (m.on_gnss_clock(), t_eff, true),
+                    Due::Withheld(m) => (m.on_gnss_clock(), m.t(), false),
+                });
+            }
+            got
+        };
+        assert!(due_down_to(3.3, &mut inbox).is_empty());
+        assert_eq!(due_down_to(3.2, &mut inbox), vec![(true, 3.2, true)]);
+        // At 2: the odometer (last in the merged order) first, then the withheld fix.
+        assert_eq!(
+            due_down_to(1.9, &mut inbox),
+            vec![(false, 2.0, true), (true, 2.0, false)]
+        );
+        // The fix tagged 1.0 (due at 1.2) waits behind the odometer at 1.0, as forward
+        // the odometer waits behind it (the merged order, mirrored): both come when the
+        // odometer is due, the fix then behind the navigator (applied at once).
+        assert!(due_down_to(1.1, &mut inbox).is_empty());
+        assert_eq!(
+            due_down_to(0.0, &mut inbox),
+            vec![(false, 1.0, true), (true, 1.2, true)]
+        );
+        assert!(due_down_to(-10.0, &mut inbox).is_empty());
     }
 }
