@@ -533,3 +533,50 @@ fn compensation_commutes_with_the_reversal() {
     let b = e.compensate(&reversed(&s));
     assert!((a.dtheta - b.dtheta).norm() < 1e-18 && (a.dvel - b.dvel).norm() < 1e-15);
 }
+
+/// `start_time` bounds the run (it stops before a sample reaching below it), samples
+/// after the start (or after `end_time`) are skipped, and a sample straddling the
+/// start is integrated from the start only.
+#[test]
+fn backward_run_is_bounded_by_the_start_and_the_configured_times() {
+    let imu = manoeuvring_imu(100.0, 0.01, 1000);
+    let a = start_state(100.0);
+    let run_from = |c: &NavConfig, t_start: f64| {
+        let mut st = start_of(&a);
+        st.t = t_start;
+        let mut times = Vec::new();
+        let mut total = 0.0;
+        let s = run_backward::<NavError>(
+            c,
+            |_, _| Vec::new(),
+            st,
+            imu.iter().rev().map(|s| Ok(*s)),
+            &[],
+            None,
+            |n| {
+                times.push(n.nav().t);
+                total = -n.integrated().0;
+                Ok(())
+            },
+            |_| {},
+        )
+        .unwrap();
+        (times, total, s)
+    };
+    let mut c = cfg();
+    c.start_time = 105.0;
+    let (times, total, s) = run_from(&c, 110.0);
+    assert_eq!(times.len(), 500);
+    assert!((times[times.len() - 1] - 105.0).abs() < 1e-9 && s.imu_samples == 500);
+    assert!((total - 5.0).abs() < 1e-9);
+    // Starting between two samples: the straddling one from the start down.
+    let c = cfg();
+    let (times, total, _) = run_from(&c, 107.004);
+    assert!((times[0] - 107.0).abs() < 1e-9, "{}", times[0]);
+    assert!((total - 7.004).abs() < 1e-9, "{total}");
+    // end_time below the start: the samples after it are skipped.
+    let mut c = cfg();
+    c.end_time = Some(108.0);
+    let (times, _, _) = run_from(&c, 108.0);
+    assert!((times[0] - 107.99).abs() < 1e-9 && times.len() == 800);
+}
