@@ -187,8 +187,11 @@ pub fn fill_qc(
     }
 }
 
-/// Discretise over `dt` (SYSTEM.md §2): Phi = I + F dt, Qd = Qc dt (first order;
-/// the propagation interval is at most a few tenths of a second).
+/// Discretise over `dt` (SYSTEM.md §2): Phi = I + F dt, Qd = Qc |dt| (first order;
+/// the propagation interval is at most a few tenths of a second). A backward run
+/// (nav/backward.rs) has dt < 0: the kinematic couplings take the signed dt, the
+/// noise grows with |dt|, and the Gauss-Markov rows are set by
+/// [`Discretizer::reverse_gauss_markov`].
 pub struct Discretizer {
     pub f: DMatrix<f64>,
     pub qc: DMatrix<f64>,
@@ -216,8 +219,25 @@ impl Discretizer {
         for i in 0..n {
             self.phi.as_mut_slice()[i * n + i] += 1.0;
         }
+        let adt = dt.abs();
         for (q, c) in self.qd.as_mut_slice().iter_mut().zip(self.qc.as_slice()) {
-            *q = c * dt;
+            *q = c * adt;
+        }
+    }
+
+    /// Backward (dt < 0): the first-order Gauss-Markov states among `states` (F
+    /// diagonal -1/T < 0) decay with |dt| as forward, exactly: Phi = exp(-|dt|/T),
+    /// Qd = sigma² (1 - exp(-2|dt|/T)) with sigma² = Qc T / 2 (a stationary
+    /// Gauss-Markov process has the same law reversed in time). I + F dt would grow
+    /// them by |dt|/T per step.
+    pub fn reverse_gauss_markov(&mut self, states: std::ops::Range<usize>, dt: f64) {
+        for i in states {
+            let a = self.f[(i, i)];
+            if a < 0.0 {
+                let e = (a * dt.abs()).exp();
+                self.phi[(i, i)] = e;
+                self.qd[(i, i)] = self.qc[(i, i)] / (-2.0 * a) * (1.0 - e * e);
+            }
         }
     }
 }

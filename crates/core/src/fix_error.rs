@@ -133,9 +133,10 @@ impl RejectStreak {
     }
 
     /// The rejected fixes have agreed with each other over at least `readmit_s`
-    /// (measured between rejected fixes, not up to now: an outage is no agreement).
+    /// (measured between rejected fixes, not up to now: an outage is no agreement;
+    /// either way in time, for a backward run).
     pub fn agreed_for(&self, readmit_s: f64) -> bool {
-        self.last.0 - self.agree_since >= readmit_s
+        (self.last.0 - self.agree_since).abs() >= readmit_s
     }
 }
 

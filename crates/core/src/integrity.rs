@@ -20,6 +20,7 @@
 //! engine feeds [`EpochCheck`]s and logs the [`Transition`]s.
 
 use crate::chi2::chi2_threshold;
+use crate::nav::timeline::TimeDirection;
 use nalgebra::Vector3;
 use std::collections::VecDeque;
 
@@ -217,6 +218,8 @@ pub struct IntegrityMonitor {
     /// Epochs tested and transitions so far.
     pub epochs: usize,
     pub transitions: Vec<Transition>,
+    /// Which way the epochs come in time (a backward run: decreasing).
+    dir: TimeDirection,
 }
 
 impl IntegrityMonitor {
@@ -231,7 +234,14 @@ impl IntegrityMonitor {
             last_refused: None,
             epochs: 0,
             transitions: Vec::new(),
+            dir: TimeDirection::Forward,
         }
+    }
+
+    /// Set which way the epochs come in time (a backward run: decreasing times); the
+    /// spans, windows and agreement times are measured along it.
+    pub fn set_direction(&mut self, dir: TimeDirection) {
+        self.dir = dir;
     }
 
     pub fn state(&self) -> IntegrityState {
@@ -294,7 +304,7 @@ impl IntegrityMonitor {
             ref_var += later.ref_increment_var_ned_m2;
             vel_std = vel_std.sup(&later.vel_std_ned_mps);
             later = j;
-            let dt = c.t - tj;
+            let dt = self.dir.elapsed(*tj, c.t);
             let rho = if tau > 0.0 { (-dt / tau).exp() } else { 0.0 };
             let e = (k.gnss_correction_ned_m - j.gnss_correction_ned_m)
                 - (k.innovation_ned_m - j.innovation_ned_m);
@@ -328,7 +338,7 @@ impl IntegrityMonitor {
             return false;
         };
         let consistent = self.last_refused.is_some_and(|(ta, a)| {
-            let dt = c.t - ta;
+            let dt = self.dir.elapsed(ta, c.t);
             let e = (k.innovation_ned_m - a.innovation_ned_m)
                 - (k.gnss_correction_ned_m - a.gnss_correction_ned_m);
             (0..3).all(|i| {
@@ -343,7 +353,7 @@ impl IntegrityMonitor {
             self.consistent_since = c.t;
             self.last_refused = Some((c.t, k));
         }
-        c.t - self.consistent_since >= max
+        self.dir.elapsed(self.consistent_since, c.t) >= max
     }
 
     /// Test one epoch and decide whether its GNSS may be fused.
@@ -392,7 +402,7 @@ impl IntegrityMonitor {
                 if self.state == Spoofed {
                     self.agree_since = c.t;
                 }
-                if c.t - self.agree_since >= self.opt.readmit_s {
+                if self.dir.elapsed(self.agree_since, c.t) >= self.opt.readmit_s {
                     (Trusted, true)
                 } else {
                     (Recovering, false)
@@ -404,7 +414,7 @@ impl IntegrityMonitor {
             let (detector, statistic, threshold) = match fail {
                 Some(_) if next == Trusted => (
                     Detector::Consistency,
-                    c.t - self.consistent_since,
+                    self.dir.elapsed(self.consistent_since, c.t),
                     self.opt.max_refuse_s.unwrap_or(f64::NAN),
                 ),
                 Some(f) => f,

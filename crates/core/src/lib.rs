@@ -32,10 +32,12 @@ pub mod types;
 
 pub use aiding::source::{AidingSource, Fuser, Handled};
 pub use events::{AidStatus, Event, RunSummary};
+pub use nav::backward::{run_backward, BackwardStart};
 pub use nav::ins_filter::{BlockProcess, BlockSpec, Fused};
 pub use nav::navigator::{NavError, Navigator};
 pub use nav::run::{run, run_recording, run_with_sources, SourceFactory};
 pub use nav::timeline;
+pub use nav::timeline::TimeDirection;
 pub use types::{
     merge_measurements, merge_more, merge_raw_epochs, GnssFix, GnssRawEpoch, HeadingObs, ImuErrors,
     ImuSample, Measurement, NavState, OdometerSample, SatMeasurement,
@@ -47,9 +49,11 @@ pub mod prelude {
     pub use crate::aiding::{Aiding, Linearized};
     pub use crate::config::NavConfig;
     pub use crate::events::{AidStatus, Event, RunSummary};
+    pub use crate::nav::backward::{run_backward, BackwardStart};
     pub use crate::nav::ins_filter::{BlockProcess, BlockSpec, Fused};
     pub use crate::nav::navigator::{NavError, Navigator};
     pub use crate::nav::run::{run, run_with_sources, SourceFactory};
+    pub use crate::nav::timeline::TimeDirection;
     pub use crate::state::{Block, StateLayout};
     pub use crate::types::{GnssFix, ImuErrors, ImuSample, Measurement, NavState};
 }

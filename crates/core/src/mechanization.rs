@@ -66,13 +66,19 @@ impl Mechanizer {
         Self::default()
     }
 
-    /// Advance `nav` over one compensated IMU interval ending at `imu.t`.
+    /// Advance `nav` over one compensated IMU interval ending at `imu.t`. Backward
+    /// (`imu.dt` < 0, increments negated: the compensated interval (t, t - dt]
+    /// traversed from t - dt down to t) the same equations integrate towards the
+    /// past: Earth rate, transport rate, gravity and Coriolis terms scale with the
+    /// signed dt.
     pub fn step(&mut self, nav: &NavState, imu: &ImuSample) -> (NavState, StepInfo) {
         let dt = imu.dt;
         let (dth_prev, dv_prev) = match &self.prev_imu {
             // Scale the previous increments to this interval's length so a split
-            // interval does not distort the two-sample corrections.
-            Some(p) if p.dt > 0.0 => {
+            // interval does not distort the two-sample corrections. Backward (dt < 0,
+            // increments negated) the previous sample is the later one; the
+            // corrections keep their form (docs/ALGORITHMS.md "Backward filter").
+            Some(p) if p.dt * dt > 0.0 => {
                 let s = dt / p.dt;
                 (p.dtheta * s, p.dvel * s)
             }
@@ -81,9 +87,10 @@ impl Mechanizer {
         let dth = imu.dtheta;
         let dv = imu.dvel;
 
-        // Mid-interval extrapolation of latitude, height and velocity from the last two states.
+        // Mid-interval extrapolation of latitude, height and velocity from the last two
+        // states (backward: from the later two, towards the past).
         let (lat_m, h_m, v_m) = match &self.prev_nav {
-            Some(p) if nav.t > p.t => {
+            Some(p) if (nav.t - p.t) * dt > 0.0 => {
                 let k = 0.5 * dt / (nav.t - p.t);
                 (
                     nav.lla.x + k * (nav.lla.x - p.lla.x),

@@ -8,6 +8,7 @@
 //! so that an unknown gyro turn-on bias (degrees per second on MEMS parts) does not
 //! hide a standstill; the odometer, when present, vetoes steady motion.
 
+use crate::nav::timeline::TimeDirection;
 use nalgebra::Vector3;
 use std::collections::VecDeque;
 
@@ -39,8 +40,10 @@ impl StaticDetector {
     }
 
     /// Add one compensated IMU interval ending at `t`: specific force and rate \[SI\].
+    /// In a backward run the interval is time-reversed: `dt` < 0, it starts at
+    /// t - dt > t (the window then reaches from the latest sample's upper end down).
     pub fn push(&mut self, t: f64, dt: f64, f_b: &Vector3<f64>, w_b: &Vector3<f64>) {
-        if dt <= 0.0 {
+        if dt == 0.0 {
             return;
         }
         self.samples.push_back((t, dt, *f_b, *w_b));
@@ -51,7 +54,10 @@ impl StaticDetector {
         self.sum_w_dt += w_b * dt;
         self.sum_dt += dt;
         while let Some(&(t0, dt0, f0, w0)) = self.samples.front() {
-            if t - (t0 - dt0) <= self.window_s + 1e-9 {
+            // Span from where the oldest sample starts to now, along the run.
+            let span = t - (t0 - dt0);
+            let span = if dt0 < 0.0 { -span } else { span };
+            if span <= self.window_s + 1e-9 {
                 break;
             }
             self.samples.pop_front();
@@ -74,7 +80,7 @@ impl StaticDetector {
     /// standard deviations: sqrt(mean |x|² - |mean x|²)).
     pub fn static_mean_rate(&self, accel_std_max: f64, gyro_std_max: f64) -> Option<Vector3<f64>> {
         let n = self.samples.len();
-        if n < 3 || self.sum_dt < 0.9 * self.window_s {
+        if n < 3 || self.sum_dt.abs() < 0.9 * self.window_s {
             return None;
         }
         let k = n as f64;
@@ -94,6 +100,8 @@ impl StaticDetector {
 pub struct Window<T> {
     window_s: f64,
     items: VecDeque<(f64, T)>,
+    /// Which way time goes (a backward run pushes decreasing times).
+    dir: TimeDirection,
 }
 
 impl<T: Copy> Window<T> {
@@ -101,21 +109,39 @@ impl<T: Copy> Window<T> {
         Window {
             window_s,
             items: VecDeque::new(),
+            dir: TimeDirection::Forward,
         }
+    }
+
+    /// Set which way time goes (before the first push).
+    pub fn set_direction(&mut self, dir: TimeDirection) {
+        self.dir = dir;
     }
 
     /// Add a value at `t`; values older than the window (but the newest) are dropped.
     pub fn push(&mut self, t: f64, v: T) {
         self.items.push_back((t, v));
-        while self.items.len() > 1 && self.items[0].0 < t - self.window_s - 1e-9 {
+        let (dir, w) = (self.dir, self.window_s);
+        let old = |t0: f64| match dir {
+            TimeDirection::Forward => t0 < t - w - 1e-9,
+            TimeDirection::Backward => t0 > t + w + 1e-9,
+        };
+        while self.items.len() > 1 && old(self.items[0].0) {
             self.items.pop_front();
         }
     }
 
     /// The values no older than the window as seen from `t_now`.
     pub fn recent(&self, t_now: f64) -> impl Iterator<Item = &(f64, T)> {
-        let since = t_now - self.window_s - 1e-9;
-        self.items.iter().filter(move |(t, _)| *t >= since)
+        let dir = self.dir;
+        let since = match dir {
+            TimeDirection::Forward => t_now - self.window_s - 1e-9,
+            TimeDirection::Backward => t_now + self.window_s + 1e-9,
+        };
+        self.items.iter().filter(move |(t, _)| match dir {
+            TimeDirection::Forward => *t >= since,
+            TimeDirection::Backward => *t <= since,
+        })
     }
 
     /// Oldest and newest entry.
@@ -136,7 +162,7 @@ pub fn mean_speed(w: &Window<f64>, t_now: f64) -> Option<f64> {
 /// (NED \[m/s\]) sampled in the window; None until it spans half the window.
 pub fn mean_horizontal_accel(w: &Window<Vector3<f64>>, window_s: f64) -> Option<f64> {
     let ((t0, v0), (t1, v1)) = w.ends()?;
-    let span = t1 - t0;
+    let span = w.dir.elapsed(*t0, *t1);
     (span >= 0.5 * window_s).then(|| (v1 - v0).xy().norm() / span)
 }
 

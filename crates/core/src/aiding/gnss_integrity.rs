@@ -91,6 +91,7 @@ impl GnssGuard {
 
     /// Feed one epoch to the monitor, log its transition; true if GNSS may be fused.
     pub fn verdict(&mut self, f: &mut Fuser, check: &EpochCheck) -> bool {
+        self.monitor.set_direction(f.direction());
         let v = self.monitor.check(check);
         if let Some(tr) = v.transition {
             f.push_event(Event::Integrity(tr));

@@ -21,6 +21,7 @@ use crate::events::Event;
 use crate::fix_error::{igg3_factor, InnovationScale, RejectStreak};
 use crate::integrity::IntegrityState;
 use crate::nav::ins_filter::{BlockProcess, BlockSpec, Fused};
+use crate::nav::timeline::TimeDirection;
 use crate::state::{Block, POS, VEL};
 use crate::types::{GnssFix, HeadingObs, Measurement};
 use nalgebra::{DVector, Vector3};
@@ -178,6 +179,8 @@ impl GnssLoose {
         }
         let use_vel = g.use_velocity;
         let fe = g.fix_error;
+        // Elapsed times along the run (a backward run goes down in time).
+        let dir = f.direction();
         let mut gate_p = g.gate_probability;
         if let Some(guard) = self.guard.as_mut() {
             // The monitor replaces the gate (and its re-admission, which would let a
@@ -208,19 +211,19 @@ impl GnssLoose {
         // A streak interrupted by a gap (an outage) is stale: it starts again.
         if self
             .fix_streak
-            .is_some_and(|st| fix.t - st.last_t() > self.opt.gate_timeout_s)
+            .is_some_and(|st| dir.elapsed(st.last_t(), fix.t) > self.opt.gate_timeout_s)
         {
             self.fix_streak = None;
         }
         if let (Some(st), Some(_)) = (self.fix_streak, gate_p) {
             if st.agreed_for(fe.readmit_s) {
                 let y = st.last_innovation();
-                let span = (fix.t - st.since).max(1.0);
+                let span = dir.elapsed(st.since, fix.t).max(1.0);
                 f.widen(POS, y.component_mul(&y));
                 f.widen(VEL, (y / span).component_mul(&(y / span)));
                 f.push_event(Event::GnssReadmitted {
                     t: fix.t,
-                    streak_s: fix.t - st.since,
+                    streak_s: dir.elapsed(st.since, fix.t),
                     offset_m: y.norm(),
                 });
                 self.fix_streak = None;
@@ -231,7 +234,7 @@ impl GnssLoose {
         // plus half the plausible acceleration error over the time since.
         // High-rate fixes: at least one second's worth (a drift shows over time), and
         // the fix's 3 sigma at the spread the innovations really have.
-        let since = (fix.t - f.shared_ref().last_gnss_used_t).max(1.0);
+        let since = dir.elapsed(f.shared_ref().last_gnss_used_t, fix.t).max(1.0);
         let a = fe.floor_accel_mps2;
         let floor = 3.0 * lambda.sqrt() * fx.std_ned.amax() + 0.5 * a * since * since;
         let (fused, nis, y, weight) =
@@ -271,7 +274,7 @@ impl GnssLoose {
             }
         }
         if self.heading.course_over_ground && trusted {
-            if let Some(obs) = self.course_from(&fx) {
+            if let Some(obs) = self.course_from(&fx, dir) {
                 let g = chi2_gate(1, self.heading.gate_probability);
                 self.fuse(f, Aiding::Heading(&obs, HeadingAxis::VehicleForward), g);
             }
@@ -281,8 +284,10 @@ impl GnssLoose {
 
     /// Course over ground from the fix velocity, or from the displacement since the
     /// previous fix (seed 001 eq. 11), when fast enough; its std grows as the speed
-    /// falls: sqrt(floor² + (sigma_v / v)²).
-    fn course_from(&self, f: &GnssFix) -> Option<HeadingObs> {
+    /// falls: sqrt(floor² + (sigma_v / v)²). The previous fix is the later one in a
+    /// backward run: the displacement over the signed time difference is the same
+    /// velocity.
+    fn course_from(&self, f: &GnssFix, dir: TimeDirection) -> Option<HeadingObs> {
         let c = &self.heading;
         let (v_ne, sigma_v) = match (f.vel_ned, f.vel_std_ned) {
             (Some(v), s) => (
@@ -292,12 +297,13 @@ impl GnssLoose {
             (None, _) => {
                 let p = self.prev_fix?;
                 let dt = f.t - p.t;
-                if !(dt > 0.0 && dt <= 2.0) {
+                let elapsed = dir.elapsed(p.t, f.t);
+                if !(elapsed > 0.0 && elapsed <= 2.0) {
                     return None;
                 }
                 let d = lla_diff_ned(&f.lla, &p.lla);
                 let sp = (f.std_ned.x.hypot(f.std_ned.y) + p.std_ned.x.hypot(p.std_ned.y)) / 2.0;
-                ((d.x / dt, d.y / dt), sp / dt)
+                ((d.x / dt, d.y / dt), sp / elapsed)
             }
         };
         let speed = v_ne.0.hypot(v_ne.1);

@@ -53,15 +53,17 @@ impl AidingSource for NhcSource {
     fn after_imu(&mut self, f: &mut Fuser) {
         let c = &self.opt;
         let t = f.nav().t;
+        // Elapsed time and cadence along the run (a backward run goes down in time).
+        let dir = f.direction();
         let due = match c.mode {
             NhcMode::Off => false,
             NhcMode::Always => true,
             NhcMode::DuringOutage => {
-                f.time_gnss() - f.shared_ref().last_gnss_used_t >= c.outage_after_s
+                dir.elapsed(f.shared_ref().last_gnss_used_t, f.time_gnss()) >= c.outage_after_s
             }
         };
-        if due && !f.shared_ref().is_static && t >= self.next_t - 1e-9 {
-            self.next_t = t + 1.0 / c.rate_hz;
+        if due && !f.shared_ref().is_static && dir.reached(t, self.next_t, 1e-9) {
+            self.next_t = dir.advance(t, 1.0 / c.rate_hz);
             if f.nav().v_n.norm() >= c.min_speed_mps {
                 let g = chi2_gate(2, c.gate_probability);
                 f.fuse(Aiding::Nhc(c.std_mps), g);

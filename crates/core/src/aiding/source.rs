@@ -13,6 +13,7 @@ use crate::events::{AidStatus, Event, RunSummary};
 use crate::filter::UpdateOutcome;
 use crate::integrity::IntegrityState;
 use crate::nav::ins_filter::{BlockProcess, BlockSpec, Fused, InsFilter};
+use crate::nav::timeline::TimeDirection;
 use crate::six_state::SixState;
 use crate::state::{Block, StateLayout};
 use crate::types::{ImuErrors, ImuSample, Measurement, NavState};
@@ -29,7 +30,8 @@ pub enum Handled {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Shared {
     /// Time of the last GNSS epoch used (GNSS time) \[s\]: the NHC's outage mode and
-    /// the loose drift floor read it.
+    /// the loose drift floor read it (the start time until then; in a backward run
+    /// the latest GNSS time used, going down).
     pub last_gnss_used_t: f64,
     /// The static detector sees the vehicle at rest (ZUPT): no NHC meanwhile.
     pub is_static: bool,
@@ -92,6 +94,13 @@ impl Fuser<'_> {
     /// Time of the current state on the GNSS time scale \[s\].
     pub fn time_gnss(&self) -> f64 {
         self.ins.time_gnss()
+    }
+
+    /// Which way the run goes in time: a backward run (nav/backward.rs) reaches the
+    /// measurements from the last to the first. Elapsed times and cadences go through
+    /// it (`TimeDirection::elapsed`, `advance`, `reached`).
+    pub fn direction(&self) -> TimeDirection {
+        self.ins.direction
     }
 
     pub fn layout(&self) -> &StateLayout {

@@ -13,7 +13,9 @@
 //! The velocity column follows from d D ~ d v dt (the error of the displacement is
 //! the velocity error over the interval); using the exact INS displacement instead
 //! of v_k dt keeps the acceleration over the interval out of the model. The clock
-//! difference b_k - b_{k-1} is modelled as d dt.
+//! difference b_k - b_{k-1} is modelled as d dt. A backward run differences each epoch
+//! with the later one (dt < 0, D from it): every term is a mean rate over the signed
+//! interval, so the model holds unchanged.
 
 use super::pseudorange::{antenna_ecef, row};
 use super::{AidingContext, Linearized};
@@ -46,7 +48,9 @@ pub fn linearize(
 ) -> Option<Linearized> {
     let phi = sat.carrier_m?;
     let dt = interval.dt_s;
-    if dt <= 0.0 {
+    // dt < 0 in a backward run (the previous epoch is the later one): z, the
+    // prediction and H are mean rates over the signed interval, the same model.
+    if dt == 0.0 {
         return None;
     }
     let (r_ant, c_ne, h_pos) = antenna_ecef(ctx);

@@ -43,8 +43,9 @@ pub struct TightGnss {
     /// Time of the last epoch with a pseudorange fused (None: none yet).
     last_pr_used_t: Option<f64>,
     /// TDCP is fused from this time on (after a return from a gap, or an epoch whose
-    /// carriers mostly disagreed with the INS, Doppler stands in until then).
-    carriers_trusted_from: f64,
+    /// carriers mostly disagreed with the INS, Doppler stands in until then; None:
+    /// from the start).
+    carriers_trusted_from: Option<f64>,
 }
 
 /// Median of the values (reordered), None when empty.
@@ -74,7 +75,7 @@ impl TightGnss {
             prev_t: None,
             prev_lever_ecef_m: Vector3::zeros(),
             last_pr_used_t: None,
-            carriers_trusted_from: f64::NEG_INFINITY,
+            carriers_trusted_from: None,
         })
     }
 
@@ -97,9 +98,11 @@ impl TightGnss {
     fn update(&mut self, f: &mut Fuser, epoch: &GnssRawEpoch) {
         let opt = &self.opt;
         let gate = chi2_gate(1, opt.gate_probability);
+        // Elapsed times along the run (a backward run goes down in time).
+        let dir = f.direction();
         // Sigmas: scaled, then floored (the TDCP floor is per interval of dt, shared
         // by the two epochs' carriers).
-        let dt = self.prev_t.map_or(1.0, |t0| epoch.t - t0);
+        let dt = self.prev_t.map_or(1.0, |t0| dir.elapsed(t0, epoch.t));
         let carrier_floor = opt.range_rate_sigma_floor_mps * dt / std::f64::consts::SQRT_2;
         let sats: Vec<SatMeasurement> = epoch
             .sats
@@ -153,8 +156,9 @@ impl TightGnss {
             self.last_pr_used_t,
             self.opt.use_pseudorange,
         ) {
-            if epoch.t - t0 >= self.gate_timeout_s {
-                self.return_from_gap(f, epoch.t, epoch.t - t0, fix);
+            let gap_s = dir.elapsed(t0, epoch.t);
+            if gap_s >= self.gate_timeout_s {
+                self.return_from_gap(f, epoch.t, gap_s, fix);
                 self.check_clock(f, epoch.t, &sats);
             }
         }
@@ -172,7 +176,9 @@ impl TightGnss {
             RangeRate::None => {}
             RangeRate::Doppler => used |= self.fuse_snooped(f, &doppler, beyond_gate, |_, _, _| {}),
             RangeRate::Tdcp => {
-                let trusted = epoch.t >= self.carriers_trusted_from;
+                let trusted = self
+                    .carriers_trusted_from
+                    .is_none_or(|from| dir.reached(epoch.t, from, 0.0));
                 match self.fuse_tdcp(f, epoch.t, &sats, trusted) {
                     Some(u) => used |= u,
                     // Carriers not trusted (yet): the Doppler, when there is one.
@@ -263,7 +269,7 @@ impl TightGnss {
         });
         self.clock_set = false;
         self.prev_t = None;
-        self.carriers_trusted_from = t + CARRIER_WARMUP_S;
+        self.carriers_trusted_from = Some(f.direction().advance(t, CARRIER_WARMUP_S));
     }
 
     /// Set the clock bias (and drift) states from the measurements at the first
@@ -325,13 +331,15 @@ impl TightGnss {
         let nav = *f.nav();
         let c_bn = nav.q_bn.to_rotation_matrix().into_inner();
         let lever_ecef = c_ne(nav.lla.x, nav.lla.y) * c_bn * self.lever_arm_b;
+        // Backward the previous epoch is the later one: D and dt are both from it to
+        // this epoch (signed), and the TDCP model holds as it is (tdcp.rs).
         let interval = self.prev_t.map(|t0| Interval {
             antenna_displacement_ecef_m: f.displacement_ecef_m() + lever_ecef
                 - self.prev_lever_ecef_m,
             dt_s: t - t0,
         });
         let mut rows = Vec::new();
-        if let Some(iv) = interval.filter(|iv| iv.dt_s <= self.opt.tdcp_max_gap_s) {
+        if let Some(iv) = interval.filter(|iv| iv.dt_s.abs() <= self.opt.tdcp_max_gap_s) {
             for s in sats
                 .iter()
                 .filter(|s| !s.lost_lock && s.carrier_m.is_some())
@@ -365,7 +373,7 @@ impl TightGnss {
                 flagged,
                 of: rows.len(),
             });
-            self.carriers_trusted_from = t + CARRIER_WARMUP_S;
+            self.carriers_trusted_from = Some(f.direction().advance(t, CARRIER_WARMUP_S));
             None
         } else {
             let mut slips = Vec::new();
@@ -505,7 +513,8 @@ impl AidingSource for TightGnss {
         Handled::Yes
     }
 
-    /// The clock bias follows its drift.
+    /// The clock bias follows its drift (backward the piece is time-reversed, dt < 0:
+    /// b(t - |dt|) = b(t) - drift |dt|).
     fn on_propagate(&mut self, s: &ImuSample, f: &mut Fuser) {
         let drift = f.extra(Block::ClockDrift)[0];
         f.extra_mut(Block::ClockBias)[0] += drift * s.dt;

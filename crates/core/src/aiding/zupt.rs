@@ -63,8 +63,9 @@ pub struct Zupt {
     odo_speeds: Window<f64>,
     /// The mechanization's own velocity sum, sampled after each IMU sample.
     mech_dv_window: Window<Vector3<f64>>,
-    /// Last time a GNSS fix reported a speed above `max_speed_mps` (GNSS time).
-    gnss_moving_t: f64,
+    /// Last time a GNSS fix reported a speed above `max_speed_mps` (GNSS time; None:
+    /// none yet).
+    gnss_moving_t: Option<f64>,
     next_t: f64,
 }
 
@@ -80,7 +81,7 @@ impl Zupt {
             refused: false,
             odo_speeds: Window::new(z.window_s),
             mech_dv_window: Window::new(z.window_s),
-            gnss_moving_t: f64::NEG_INFINITY,
+            gnss_moving_t: None,
             next_t: t0,
         })
     }
@@ -93,6 +94,7 @@ impl AidingSource for Zupt {
 
     /// Watches the odometer and the GNSS speed for the motion vetoes (fuses nothing).
     fn on_measurement(&mut self, m: &Measurement, f: &mut Fuser) -> Handled {
+        self.odo_speeds.set_direction(f.direction());
         match m {
             Measurement::Odometer(o) => self.odo_speeds.push(f.nav().t, o.speed_mps),
             Measurement::Gnss(fix) => {
@@ -100,7 +102,7 @@ impl AidingSource for Zupt {
                     .vel_ned
                     .is_some_and(|v| v.norm() > self.opt.max_speed_mps)
                 {
-                    self.gnss_moving_t = fix.t;
+                    self.gnss_moving_t = Some(fix.t);
                 }
             }
             _ => {}
@@ -108,8 +110,9 @@ impl AidingSource for Zupt {
         Handled::No
     }
 
+    /// Backward the piece is time-reversed (dt < 0): the detector takes it so.
     fn on_propagate(&mut self, s: &ImuSample, _f: &mut Fuser) {
-        if s.dt > 0.0 {
+        if s.dt != 0.0 {
             self.detector
                 .push(s.t, s.dt, &(s.dvel / s.dt), &(s.dtheta / s.dt));
         }
@@ -122,10 +125,16 @@ impl AidingSource for Zupt {
     fn after_imu(&mut self, f: &mut Fuser) {
         let t = f.nav().t;
         let z = &self.opt;
+        // Elapsed times and cadence along the run (a backward run goes down in time).
+        let dir = f.direction();
+        self.odo_speeds.set_direction(dir);
+        self.mech_dv_window.set_direction(dir);
         self.mech_dv_window.push(t, f.mech_dv_n());
         let odo_still = !self.odometer_enabled
             || mean_speed(&self.odo_speeds, t).is_none_or(|v| v.abs() <= z.odometer_still_mps);
-        let gnss_still = f.time_gnss() - self.gnss_moving_t > 2.0;
+        let gnss_still = self
+            .gnss_moving_t
+            .is_none_or(|tm| dir.elapsed(tm, f.time_gnss()) > 2.0);
         let slow = f.nav().v_n.norm() < z.max_speed_mps;
         let steady = mean_horizontal_accel(&self.mech_dv_window, z.window_s)
             .is_none_or(|a| a <= z.max_accel_mps2);
@@ -135,9 +144,9 @@ impl AidingSource for Zupt {
             .filter(|_| odo_still && gnss_still && slow && steady);
         match w {
             None => self.refused = false,
-            Some(rate) if t >= self.next_t - 1e-9 => {
+            Some(rate) if dir.reached(t, self.next_t, 1e-9) => {
                 let dt = 1.0 / z.rate_hz;
-                self.next_t = t + dt;
+                self.next_t = dir.advance(t, dt);
                 let gate = chi2_gate(3, z.gate_probability);
                 let fused = f.fuse(Aiding::Zupt(z.velocity_std_mps), gate);
                 // The INS disagrees with a standstill: not static until it agrees.

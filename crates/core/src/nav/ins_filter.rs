@@ -14,6 +14,7 @@ use crate::earth::lla_to_ecef;
 use crate::error_model::{fill_f, fill_qc, Discretizer, MeanMotion};
 use crate::filter::{Eskf, UpdateOutcome};
 use crate::mechanization::Mechanizer;
+use crate::nav::timeline::TimeDirection;
 use crate::six_state::SixState;
 use crate::smoother::nominal::{correct, source_ranges, Nominal, NominalMut};
 use crate::smoother::record::{Recorder, Transition};
@@ -99,6 +100,9 @@ pub struct InsFilter {
     pub(crate) six_state_out: NavState,
     /// What the RTS smoother needs, when the run records for it (smoother/record.rs).
     pub(crate) recorder: Option<Recorder>,
+    /// Which way the run goes in time (nav/backward.rs: backward, the IMU pieces
+    /// come time-reversed, dt < 0).
+    pub(crate) direction: TimeDirection,
 }
 
 /// What an update applied.
@@ -248,6 +252,7 @@ impl InsFilter {
             displacement: track_displacement.then(|| (Vector3::zeros(), lla_to_ecef(&lla))),
             corrections: 0,
             recorder: None,
+            direction: TimeDirection::Forward,
         }
     }
 
@@ -278,7 +283,9 @@ impl InsFilter {
         self.nav.t - self.time_offset_s
     }
 
-    /// Advance over one raw IMU interval; returns the compensated sample.
+    /// Advance over one raw IMU interval; returns the compensated sample. Backward
+    /// the interval comes time-reversed (timeline::ReverseRest: dt < 0, increments
+    /// negated), and so do the compensated sample, the sums and the accumulated span.
     pub(crate) fn propagate(&mut self, raw: &ImuSample) -> ImuSample {
         let sum = &mut self.integrated;
         *sum = (sum.0 + raw.dt, sum.1 + raw.dtheta, sum.2 + raw.dvel);
@@ -295,7 +302,7 @@ impl InsFilter {
             *d += r - *last;
             *last = r;
         }
-        if s.dt > 0.0 {
+        if s.dt != 0.0 {
             self.w_ib_b = s.dtheta / s.dt;
             self.a_n = (self.nav.v_n - v_before) / s.dt;
         }
@@ -303,7 +310,7 @@ impl InsFilter {
         self.acc.dv_f_n += info.dv_f_n;
         self.acc.dtheta += s.dtheta;
         self.acc.dvel += s.dvel;
-        if self.acc.dt >= self.cfg.filter.covariance_period_s - 1e-9 {
+        if self.acc.dt.abs() >= self.cfg.filter.covariance_period_s - 1e-9 {
             self.flush_covariance();
         }
         self.six_state_follow_dr();
@@ -332,7 +339,7 @@ impl InsFilter {
     /// Propagate the covariance over the accumulated span (REFERENCES \[SYS\] §2).
     pub(crate) fn flush_covariance(&mut self) {
         let a = self.acc;
-        if a.dt <= 0.0 {
+        if a.dt == 0.0 {
             return;
         }
         let mm = MeanMotion {
@@ -375,19 +382,23 @@ impl InsFilter {
                     self.disc.f[(i + k, i + k)] = -1.0 / tau;
                     self.disc.qc[(i + k, i + k)] = 2.0 * sigma[k].powi(2) / tau;
                 }
-                let e = (-a.dt / tau).exp();
+                let e = (-a.dt.abs() / tau).exp();
                 for k in 0..sb.block.len() {
                     self.extra[i + k] *= e;
                 }
             }
         }
         self.disc.discretize(a.dt);
+        if a.dt < 0.0 {
+            // Backward: the IMU errors' Gauss-Markov rows decay with |dt|.
+            self.disc.reverse_gauss_markov(BG..SA + 3, a.dt);
+        }
         for sb in &self.source_blocks {
             if let Some(BlockProcess::GaussMarkov { corr_time_s, sigma }) = &sb.process {
                 // Exact discretisation (a long span, e.g. a bridged IMU gap, must not
                 // take Phi below zero).
                 let (i, tau) = (sb.index, *corr_time_s);
-                let e = (-a.dt / tau).exp();
+                let e = (-a.dt.abs() / tau).exp();
                 for k in 0..sb.block.len() {
                     self.disc.phi[(i + k, i + k)] = e;
                     self.disc.qd[(i + k, i + k)] = sigma[k].powi(2) * (1.0 - e * e);

@@ -1,12 +1,16 @@
 //! The navigator and its time loop: the INS with its error-state filter
 //! (`ins_filter`), one IMU step with its measurements (`navigator`, `timeline`), the
-//! start (`start`) and the driver (`run`).
+//! start (`start`) and the driver (`run`); the time-reversed driver of
+//! post-processing (`backward`).
 
+pub mod backward;
 pub mod ins_filter;
 pub mod navigator;
 pub mod run;
 pub(crate) mod start;
 pub mod timeline;
 
+#[cfg(test)]
+mod backward_tests;
 #[cfg(test)]
 mod tests;

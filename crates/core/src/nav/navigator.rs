@@ -9,7 +9,7 @@
 //! its epoch (REFERENCES \[SYS\] §1, seed 000 eq. 31-32; timeline.rs).
 
 use super::ins_filter::InsFilter;
-use super::timeline::{Due, Inbox, IntervalRest};
+use super::timeline::{Due, Inbox, IntervalRest, ReverseInbox, ReverseRest, TimeDirection};
 use crate::aiding::registry;
 use crate::aiding::source::{AidingSource, Fuser, Shared};
 use crate::aiding::VehicleEstimate;
@@ -170,9 +170,20 @@ impl Navigator {
     }
 
     /// Sums of the raw IMU increments integrated so far: (dt \[s\], dtheta \[rad\],
-    /// dvel \[m/s\]), body frame.
+    /// dvel \[m/s\]), body frame (negative in a backward run, which integrates them
+    /// time-reversed).
     pub fn integrated(&self) -> (f64, Vector3<f64>, Vector3<f64>) {
         self.ins.integrated
+    }
+
+    /// Which way the run goes in time (backward: nav/backward.rs).
+    pub fn direction(&self) -> TimeDirection {
+        self.ins.direction
+    }
+
+    /// Make this navigator run backward in time (before its first step).
+    pub(crate) fn reverse_time(&mut self) {
+        self.ins.direction = TimeDirection::Backward;
     }
 
     pub fn summary(&self) -> &RunSummary {
@@ -267,9 +278,10 @@ impl Navigator {
     /// attitude (`filter.gap_accel_mps2`, `gap_rate`; T = [`GAP_MANOEUVRE_S`]), linear
     /// in dt so the total does not depend on where measurements cut the gap.
     fn propagate_bridged(&mut self, raw: &ImuSample, gap: bool) {
-        if gap && raw.dt > 0.0 {
+        // Backward the piece is time-reversed (dt < 0): the same growth over |dt|.
+        if gap && raw.dt != 0.0 {
             let f = &self.ins.cfg.filter;
-            let (a, w, t, dt) = (f.gap_accel_mps2, f.gap_rate, GAP_MANOEUVRE_S, raw.dt);
+            let (a, w, t, dt) = (f.gap_accel_mps2, f.gap_rate, GAP_MANOEUVRE_S, raw.dt.abs());
             self.ins
                 .widen(POS, Vector3::repeat(0.25 * a * a * t.powi(3) * dt));
             self.ins.widen(VEL, Vector3::repeat(a * a * t * dt));
@@ -296,6 +308,57 @@ impl Navigator {
     /// finiteness check.
     pub fn step(&mut self, imu: &ImuSample, inbox: &mut Inbox) -> Result<(), NavError> {
         let s = *imu;
+        let gap = self.begin_step(&s);
+        // Each measurement due in (t_k - dt, t_k]: integrate up to its time, apply it.
+        let mut rest = IntervalRest::new(s);
+        while let Some(due) = inbox.next_due(s.t, self.time_offset()) {
+            match due {
+                Due::Withheld(m) => self.count_withheld(m),
+                Due::Apply { m, t_eff } => {
+                    if let Some(piece) = rest.cut_until(t_eff) {
+                        self.propagate_bridged(&piece, gap);
+                    }
+                    self.apply(m);
+                }
+            }
+        }
+        if let Some(piece) = rest.take_rest() {
+            self.propagate_bridged(&piece, gap);
+        }
+        self.end_step(s.t)
+    }
+
+    /// One IMU step of a backward run (nav/backward.rs): the interval (imu.t - imu.dt,
+    /// imu.t] integrated from imu.t down to imu.t - imu.dt, cut at every measurement of
+    /// `inbox` due in it (from the latest), then the cadence-driven sources, then the
+    /// finiteness check.
+    pub(crate) fn step_backward(
+        &mut self,
+        imu: &ImuSample,
+        inbox: &mut ReverseInbox,
+    ) -> Result<(), NavError> {
+        let s = *imu;
+        let gap = self.begin_step(&s);
+        let mut rest = ReverseRest::new(s);
+        while let Some(due) = inbox.next_due(s.t - s.dt, self.time_offset()) {
+            match due {
+                Due::Withheld(m) => self.count_withheld(m),
+                Due::Apply { m, t_eff } => {
+                    if let Some(piece) = rest.cut_until(t_eff) {
+                        self.propagate_bridged(&piece, gap);
+                    }
+                    self.apply(m);
+                }
+            }
+        }
+        if let Some(piece) = rest.take_rest() {
+            self.propagate_bridged(&piece, gap);
+        }
+        self.end_step(rest.t_reached())
+    }
+
+    /// Before the interval of `s`: IMU gap detection. True when it is a gap.
+    fn begin_step(&mut self, s: &ImuSample) -> bool {
         // A gap the reader bridged: the INS knows nothing of the motion over it.
         if self.summary.imu_samples < 100 && s.dt > 0.0 {
             self.nominal_dt = self.nominal_dt.min(s.dt);
@@ -310,35 +373,26 @@ impl Navigator {
                 src.on_imu_gap();
             }
         }
-        // Each measurement due in (t_k - dt, t_k]: integrate up to its time, apply it.
-        let mut rest = IntervalRest::new(s);
-        while let Some(due) = inbox.next_due(s.t, self.time_offset()) {
-            match due {
-                Due::Withheld(m) => {
-                    if matches!(m, Measurement::Gnss(_) | Measurement::GnssRaw(_)) {
-                        self.summary.gnss_in_outage += 1;
-                    }
-                }
-                Due::Apply { m, t_eff } => {
-                    if let Some(piece) = rest.cut_until(t_eff) {
-                        self.propagate_bridged(&piece, gap);
-                    }
-                    self.apply(m);
-                }
-            }
+        gap
+    }
+
+    fn count_withheld(&mut self, m: &Measurement) {
+        if matches!(m, Measurement::Gnss(_) | Measurement::GnssRaw(_)) {
+            self.summary.gnss_in_outage += 1;
         }
-        if let Some(piece) = rest.take_rest() {
-            self.propagate_bridged(&piece, gap);
-        }
+    }
+
+    /// After the interval, at time `t`: the cadence-driven sources, the counters and
+    /// the finiteness check.
+    fn end_step(&mut self, t: f64) -> Result<(), NavError> {
         self.apply_constraints();
         self.summary.imu_samples += 1;
-        self.summary.last_t = s.t;
+        self.summary.last_t = t;
         if !self.ins.nav_is_finite()
             || (self.summary.imu_samples % 256 == 0 && !self.ins.covariance_is_finite())
         {
             return Err(NavError(format!(
-                "the navigation state stopped being finite at t = {:.3} (check the IMU units and axes, the initial attitude and the noise settings); the output before this epoch was written",
-                s.t
+                "the navigation state stopped being finite at t = {t:.3} (check the IMU units and axes, the initial attitude and the noise settings); the output before this epoch was written"
             )));
         }
         Ok(())

@@ -73,6 +73,127 @@ impl IntervalRest {
     }
 }
 
+/// Which way a run goes in time: forward (increasing t) or backward (the
+/// time-reversed run of post-processing, nav/backward.rs). The sources measure
+/// elapsed time and schedule their cadence with it, so that the same policy works
+/// both ways; forward every helper is the plain expression it replaces.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum TimeDirection {
+    #[default]
+    Forward,
+    Backward,
+}
+
+impl TimeDirection {
+    /// Time elapsed along the run from `since` to `now` \[s\]: `now - since` forward,
+    /// `since - now` backward (positive when `now` comes later in the run).
+    #[inline]
+    pub fn elapsed(self, since: f64, now: f64) -> f64 {
+        match self {
+            TimeDirection::Forward => now - since,
+            TimeDirection::Backward => since - now,
+        }
+    }
+
+    /// `t` moved by the duration `d` along the run: `t + d` forward, `t - d` backward.
+    #[inline]
+    pub fn advance(self, t: f64, d: f64) -> f64 {
+        match self {
+            TimeDirection::Forward => t + d,
+            TimeDirection::Backward => t - d,
+        }
+    }
+
+    /// `t` has reached `due` (within `tol` \[s\]) along the run: `t >= due - tol`
+    /// forward, `t <= due + tol` backward.
+    #[inline]
+    pub fn reached(self, t: f64, due: f64, tol: f64) -> bool {
+        match self {
+            TimeDirection::Forward => t >= due - tol,
+            TimeDirection::Backward => t <= due + tol,
+        }
+    }
+
+    pub fn is_backward(self) -> bool {
+        self == TimeDirection::Backward
+    }
+}
+
+/// The part of one IMU interval (t_k - dt, t_k] not yet integrated by a backward
+/// run, which goes from t_k down to t_k - dt: (t_k - dt, t_reached]. The pieces it
+/// hands out are in the time-reversed form the backward mechanization takes
+/// (nav/backward.rs): `t` the time the piece ends at (its lower end), `dt` < 0 and
+/// the increments negated, so that t - dt is where the piece starts.
+#[derive(Clone, Copy, Debug)]
+pub struct ReverseRest {
+    /// Lower end of the interval, t_k - dt.
+    lower: f64,
+    /// Time integrated down to so far.
+    reached: f64,
+    /// What is left, positive: length, angle and velocity increments.
+    dt: f64,
+    dtheta: nalgebra::Vector3<f64>,
+    dvel: nalgebra::Vector3<f64>,
+}
+
+impl ReverseRest {
+    pub fn new(sample: ImuSample) -> Self {
+        ReverseRest {
+            lower: sample.t - sample.dt,
+            reached: sample.t,
+            dt: sample.dt,
+            dtheta: sample.dtheta,
+            dvel: sample.dvel,
+        }
+    }
+
+    /// Time down to which the interval has been integrated \[s\].
+    pub fn t_reached(&self) -> f64 {
+        self.reached
+    }
+
+    /// The piece to integrate (backward) to reach `t` (the whole rest when `t` is at or
+    /// before the interval's lower end); `None` when `t` is not below the time
+    /// reached. The mirror of [`IntervalRest::cut_until`].
+    pub fn cut_until(&mut self, t: f64) -> Option<ImuSample> {
+        if self.dt <= 0.0 || t >= self.reached - SNAP_S {
+            return None;
+        }
+        if t <= self.lower + SNAP_S {
+            return self.take_rest();
+        }
+        // Linear share of the increments (constant rate inside the interval).
+        let lambda = (self.reached - t) / self.dt;
+        let (dt, dtheta, dvel) = (self.dt * lambda, self.dtheta * lambda, self.dvel * lambda);
+        self.reached = t;
+        self.dt -= dt;
+        self.dtheta -= dtheta;
+        self.dvel -= dvel;
+        Some(ImuSample {
+            t,
+            dt: -dt,
+            dtheta: -dtheta,
+            dvel: -dvel,
+        })
+    }
+
+    /// Whatever is left of the interval (down to its lower end); afterwards nothing is.
+    pub fn take_rest(&mut self) -> Option<ImuSample> {
+        let piece = ImuSample {
+            t: self.lower,
+            dt: -self.dt,
+            dtheta: -self.dtheta,
+            dvel: -self.dvel,
+        };
+        let any = self.dt > 0.0;
+        self.reached = self.lower;
+        self.dt = 0.0;
+        self.dtheta = Default::default();
+        self.dvel = Default::default();
+        any.then_some(piece)
+    }
+}
+
 /// What the inbox hands over next.
 #[derive(Debug)]
 pub enum Due<'a> {
@@ -129,6 +250,56 @@ impl<'a> Inbox<'a> {
             return None;
         }
         self.next += 1;
+        if m.on_gnss_clock() && self.outages.contains(m.t()) {
+            return Some(Due::Withheld(m));
+        }
+        Some(Due::Apply { m, t_eff })
+    }
+}
+
+/// The time-sorted measurements handed over from the last to the first as a
+/// backward run reaches them: the mirror of [`Inbox`]. They come in the reverse of
+/// the merged order (at equal times too); a GNSS-clock time is shifted by the offset
+/// as forward (one that the offset puts above an input listed after it waits for
+/// that one, as forward the other way round); GNSS outages withhold the same inputs.
+#[derive(Debug)]
+pub struct ReverseInbox<'a> {
+    meas: &'a [Measurement],
+    /// One past the next measurement to hand over (counting down).
+    next: usize,
+    outages: &'a OutageSchedule,
+}
+
+impl<'a> ReverseInbox<'a> {
+    pub fn new(meas: &'a [Measurement], outages: &'a OutageSchedule) -> Self {
+        ReverseInbox {
+            meas,
+            next: meas.len(),
+            outages,
+        }
+    }
+
+    /// Drop the trailing measurements for which `unused` holds; returns them.
+    pub fn skip_while(
+        &mut self,
+        mut unused: impl FnMut(&Measurement) -> bool,
+    ) -> &'a [Measurement] {
+        let last = self.next;
+        while self.next > 0 && unused(&self.meas[self.next - 1]) {
+            self.next -= 1;
+        }
+        &self.meas[self.next..last]
+    }
+
+    /// The next (latest remaining) measurement whose effective time is at or after
+    /// `t_low`, the lower end of the interval being integrated.
+    pub fn next_due(&mut self, t_low: f64, time_offset_s: f64) -> Option<Due<'a>> {
+        let m = self.meas.get(self.next.checked_sub(1)?)?;
+        let t_eff = effective_time(m, time_offset_s);
+        if t_eff < t_low {
+            return None;
+        }
+        self.next -= 1;
         if m.on_gnss_clock() && self.outages.contains(m.t()) {
             return Some(Due::Withheld(m));
         }
@@ -273,5 +444,118 @@ mod tests {
         let mut inbox = Inbox::new(&meas, &outages);
         assert_eq!(inbox.skip_while(|m| m.t() <= 1.0).len(), 2);
         assert!(matches!(inbox.next_due(10.0, 0.0), Some(Due::Withheld(_))));
+    }
+
+    /// The backward mirror: cuts at random times going down; the pieces (time-reversed:
+    /// dt < 0, increments negated) add up to the interval negated, each ends below the
+    /// previous one, the last at the interval's lower end.
+    #[test]
+    fn reverse_pieces_add_up_to_the_interval() {
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(16);
+        for _ in 0..20_000 {
+            let dt = 0.005;
+            let s = sample(100.0 + dt, dt);
+            let t0 = s.t - s.dt;
+            let mut times: Vec<f64> = (0..rng.random_range(0..6))
+                .map(|_| match rng.random_range(0..5) {
+                    0 => t0,
+                    1 => s.t,
+                    2 => s.t - 10f64.powf(rng.random_range(-12.0..-6.0)),
+                    3 => {
+                        t0 + if rng.random() { 1.0 } else { -1.0 }
+                            * 10f64.powf(rng.random_range(-12.0..-6.0))
+                    }
+                    _ => t0 + rng.random::<f64>() * dt,
+                })
+                .collect();
+            if rng.random() {
+                times.extend(times.clone());
+            }
+            times.sort_by(|a, b| b.total_cmp(a));
+            let mut rest = ReverseRest::new(s);
+            let mut sum = (0.0, Vector3::zeros(), Vector3::zeros());
+            let mut t_prev = s.t;
+            for &t in &times {
+                if let Some(p) = rest.cut_until(t) {
+                    assert!(p.dt < 0.0 && p.t < t_prev && p.t >= t0, "{times:?}");
+                    assert!((p.t - p.dt - t_prev).abs() < 1e-12);
+                    t_prev = p.t;
+                    sum = (sum.0 + p.dt, sum.1 + p.dtheta, sum.2 + p.dvel);
+                }
+            }
+            if let Some(p) = rest.take_rest() {
+                assert_eq!(p.t, t0);
+                sum = (sum.0 + p.dt, sum.1 + p.dtheta, sum.2 + p.dvel);
+            }
+            assert_eq!(rest.t_reached(), t0);
+            assert!(rest.take_rest().is_none() && rest.cut_until(t0 - 1.0).is_none());
+            assert!(
+                (sum.0 + s.dt).abs() <= 4.0 * f64::EPSILON * s.dt,
+                "{times:?}"
+            );
+            assert!((sum.1 + s.dtheta).norm() <= 8.0 * f64::EPSILON * s.dtheta.norm());
+            assert!((sum.2 + s.dvel).norm() <= 8.0 * f64::EPSILON * s.dvel.norm());
+        }
+    }
+
+    /// The reverse inbox: from the last measurement down, GNSS-clock inputs due at
+    /// t + offset, outages withheld, the trailing ones skipped.
+    #[test]
+    fn reverse_inbox_hands_over_from_the_end() {
+        use crate::outage::Window;
+        use crate::types::{GnssFix, OdometerSample};
+        let fix = |t: f64| GnssFix {
+            t,
+            lla: Vector3::zeros(),
+            std_ned: Vector3::repeat(1.0),
+            vel_ned: None,
+            vel_std_ned: None,
+        };
+        let odo = |t: f64| OdometerSample {
+            t,
+            speed_mps: 1.0,
+            interval_s: 0.0,
+        };
+        let meas = crate::types::merge_measurements(
+            &[fix(1.0), fix(2.0), fix(3.0), fix(4.0)],
+            &[odo(1.0), odo(2.0)],
+            &[],
+        );
+        let outages = OutageSchedule {
+            windows: vec![Window {
+                start: 1.5,
+                end: 2.5,
+            }],
+            periodic: Vec::new(),
+        };
+        let mut inbox = ReverseInbox::new(&meas, &outages);
+        assert_eq!(inbox.skip_while(|m| m.t() >= 4.0).len(), 1);
+        let offset = 0.2;
+        let due_down_to = |t_low: f64, inbox: &mut ReverseInbox| {
+            let mut got = Vec::new();
+            while let Some(d) = inbox.next_due(t_low, offset) {
+                got.push(match d {
+                    Due::Apply { m, t_eff } => (m.on_gnss_clock(), t_eff, true),
+                    Due::Withheld(m) => (m.on_gnss_clock(), m.t(), false),
+                });
+            }
+            got
+        };
+        assert!(due_down_to(3.3, &mut inbox).is_empty());
+        assert_eq!(due_down_to(3.2, &mut inbox), vec![(true, 3.2, true)]);
+        // At 2: the odometer (last in the merged order) first, then the withheld fix.
+        assert_eq!(
+            due_down_to(1.9, &mut inbox),
+            vec![(false, 2.0, true), (true, 2.0, false)]
+        );
+        // The fix tagged 1.0 (due at 1.2) waits behind the odometer at 1.0, as forward
+        // the odometer waits behind it (the merged order, mirrored): both come when the
+        // odometer is due, the fix then behind the navigator (applied at once).
+        assert!(due_down_to(1.1, &mut inbox).is_empty());
+        assert_eq!(
+            due_down_to(0.0, &mut inbox),
+            vec![(false, 1.0, true), (true, 1.2, true)]
+        );
+        assert!(due_down_to(-10.0, &mut inbox).is_empty());
     }
 }
