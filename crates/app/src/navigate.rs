@@ -236,7 +236,12 @@ pub(crate) fn navigate(
         )
     })?;
     if let Some(l) = log.into_inner() {
-        let rep = l.smooth(&layout, sink, opts.progress, job)?;
+        let inputs = crate::smooth::BackwardInputs {
+            nav: &cfg.nav,
+            measurements: &measurements,
+            extra_sources: opts.extra_sources,
+        };
+        let rep = l.smooth(&layout, sink, opts.progress, job, &inputs)?;
         job.smoother = Some(rep);
     }
     if opts.progress {

@@ -78,6 +78,20 @@ fn kfgins_standin_outages_pinned_at_both_ends() {
     assert_eq!(summary["smoother"]["mode"], "rts");
     assert!(f(&summary, &["smoother", "epochs"]) > 30000.0);
     let _ = std::fs::remove_dir_all(&out);
+    // Mode "combined" (an independent backward filter, weighted state by state).
+    let out = base.join("combined");
+    run_with(
+        &toml,
+        &out,
+        &["--outages", gaps, "--smooth-mode", "combined"],
+    );
+    let hc = f(
+        &eval_json(&out.join("smoothed.nav"), &truth, &["--gaps", gaps]),
+        &["gap_max_rms", "horizontal_m"],
+    );
+    eprintln!("outages, combined: {hc:.4} m ({:.3}x)", hc / hf);
+    assert!(hc <= 0.25 * hf, "combined {hc} vs forward {hf}");
+    let _ = std::fs::remove_dir_all(&out);
     // All GNSS.
     let out = base.join("all");
     run_with(&toml, &out, &["--smooth"]);
@@ -122,6 +136,19 @@ fn drive_outages_with_nhc() {
         hs / hf
     );
     assert!(hs <= 0.35 * hf, "smoothed {hs} vs forward {hf}");
+    let out_c = tmp("smooth-drive-combined");
+    run_with(
+        &repo().join("examples/drive_0708_nhc.toml"),
+        &out_c,
+        &["--outages", gaps, "--smooth-mode", "combined"],
+    );
+    let hc = f(
+        &eval_json(&out_c.join("smoothed.nav"), &pos, &ex),
+        &["gap_max_rms", "horizontal_m"],
+    );
+    eprintln!("drive, combined: {hc:.2} m ({:.3}x)", hc / hf);
+    assert!(hc <= 0.35 * hf, "combined {hc} vs forward {hf}");
+    let _ = std::fs::remove_dir_all(&out_c);
     // The extra states (mounting, fix errors) are smoothed too.
     let states = std::fs::read_to_string(out.join("smoothed_states.csv")).unwrap();
     assert!(states

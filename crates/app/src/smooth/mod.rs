@@ -13,9 +13,11 @@ use crate::summary::JobResult;
 use codec::{Dec, Enc};
 use indicatif::{ProgressBar, ProgressStyle};
 use nalgebra::DVector;
+use navfuse_core::smoother::combine::{combine, difference};
 use navfuse_core::smoother::{self, extra_names, Nominal, RtsBackward, RtsRecord};
 use navfuse_core::state::{StateLayout, ATT, N_INS};
 use navfuse_core::time::split_week;
+use navfuse_core::BackwardStart;
 use navfuse_core::{ImuSample, Navigator};
 use navfuse_io::input::{SmootherMode, SmootherSpec};
 use navfuse_io::nav::SolutionRecord;
@@ -70,6 +72,14 @@ impl SmootherReport {
 
 fn io_err(what: &str) -> impl Fn(std::io::Error) -> Error + '_ {
     move |e| Error::io(format!("smoother scratch file ({what})"), e)
+}
+
+/// What the backward filter (mode "combined") runs on: the forward run's navigator
+/// configuration (after the time-offset estimate), its measurements and sources.
+pub(crate) struct BackwardInputs<'a> {
+    pub nav: &'a navfuse_core::config::NavConfig,
+    pub measurements: &'a [navfuse_core::Measurement],
+    pub extra_sources: Option<navfuse_core::SourceFactory>,
 }
 
 /// What the forward pass keeps for the smoother, on disk.
@@ -271,6 +281,7 @@ impl ForwardLog {
         sink: &mut dyn SolutionSink,
         progress: bool,
         job: &mut JobResult,
+        inputs: &BackwardInputs,
     ) -> Result<SmootherReport, Error> {
         let t0 = Instant::now();
         let Some(layout) = self.layout.clone() else {
@@ -290,9 +301,9 @@ impl ForwardLog {
         sink.begin_smoothed(&slayout, &mut job.files)?;
         let r = match self.spec.mode {
             SmootherMode::Rts => self.rts(&layout, base, sink, progress, &mut rep),
-            SmootherMode::Combined => Err(Error::Other(
-                "smoother mode \"combined\" is not available in this build".into(),
-            )),
+            SmootherMode::Combined => {
+                self.combined(&layout, base, sink, progress, &mut rep, inputs)
+            }
         };
         let ended = sink.end_smoothed();
         r?;
@@ -386,6 +397,158 @@ impl ForwardLog {
                 rep.separation_flagged += u64::from(row.flagged);
                 rep.separation_max_ratio = rep.separation_max_ratio.max(row.max_ratio);
                 sink.separation(&row)?;
+            }
+            sink.smoothed(&out)?;
+            rep.epochs += 1;
+            if let Some(b) = &b {
+                if rep.epochs % 8192 == 0 {
+                    b.set_position(rep.epochs);
+                }
+            }
+        }
+        if let Some(b) = &b {
+            b.finish_and_clear();
+        }
+        Ok(())
+    }
+
+    /// Mode "combined": the backward filter over the kept IMU samples, then each
+    /// output epoch combined with it state by state.
+    fn combined(
+        &mut self,
+        layout: &StateLayout,
+        base: &OutputLayout,
+        sink: &mut dyn SolutionSink,
+        progress: bool,
+        rep: &mut SmootherReport,
+        inputs: &BackwardInputs,
+    ) -> Result<(), Error> {
+        let n = layout.len();
+        let src = self.source_idx.clone();
+        // The forward run's first and last output epochs bound the backward run.
+        let first = {
+            let mut f = self.epochs.forward().map_err(io_err("epochs"))?;
+            let b = f.next_entry().map_err(io_err("epochs"))?.ok_or_else(|| {
+                Error::Other("smoothing: the forward run gave no output epoch".into())
+            })?;
+            get_epoch(b, n, &src, true).map_err(io_err("epochs"))?
+        };
+        let last = {
+            let mut b = self.epochs.backward().map_err(io_err("epochs"))?;
+            let e = b
+                .next_entry()
+                .map_err(io_err("epochs"))?
+                .unwrap_or_default();
+            get_epoch(e, n, &src, true).map_err(io_err("epochs"))?
+        };
+        let mut cfg = inputs.nav.clone();
+        cfg.start_time = first.nominal.nav.t;
+        let start = BackwardStart {
+            t: last.nominal.nav.t,
+            lla: last.nominal.nav.lla,
+            v_n: last.nominal.nav.v_n,
+            rpy: navfuse_core::attitude::euler_from_q_bn(&last.nominal.nav.q_bn),
+        };
+        let dir = self.records.dir().unwrap_or_else(std::env::temp_dir);
+        let mut bwd = Spill::create(&dir, "backward").map_err(io_err("backward"))?;
+        let imu_spill = self
+            .imu
+            .as_mut()
+            .ok_or_else(|| Error::Other("smoothing: no IMU samples kept".into()))?;
+        let mut imu = imu_spill.backward().map_err(io_err("imu"))?;
+        let imu_iter = std::iter::from_fn(|| match imu.next_entry() {
+            Ok(Some(b)) => Some(codec::get_imu(b).map_err(io_err("imu"))),
+            Ok(None) => None,
+            Err(e) => Some(Err(io_err("imu")(e))),
+        });
+        let span = (start.t - cfg.start_time).max(0.0);
+        let b = bar(progress, (span * 10.0) as u64, "smoothing: backward filter");
+        let t_back = Instant::now();
+        let mut enc = Enc::default();
+        let mut bad_layout = false;
+        let summary = navfuse_core::run_backward(
+            &cfg,
+            |c: &navfuse_core::config::NavConfig, t0| {
+                inputs.extra_sources.map_or_else(Vec::new, |f| f(c, t0))
+            },
+            start,
+            imu_iter,
+            inputs.measurements,
+            None,
+            |nv: &Navigator| {
+                if nv.layout().len() != n {
+                    bad_layout = true;
+                }
+                enc.clear();
+                codec::put_nominal(&mut enc, &nv.nominal(), &src);
+                let p = nv.covariance();
+                enc.fs((0..p.nrows()).map(|i| &p[(i, i)]).collect::<Vec<_>>());
+                bwd.push(&enc.0).map_err(io_err("backward"))
+            },
+            |t| {
+                if let Some(b) = &b {
+                    b.set_position(((start.t - t) * 10.0).max(0.0) as u64);
+                }
+            },
+        )?;
+        if let Some(b) = &b {
+            b.finish_and_clear();
+        }
+        if bad_layout {
+            return Err(Error::Other(
+                "smoothing: the backward filter's states differ from the forward one's".into(),
+            ));
+        }
+        rep.backward_s = t_back.elapsed().as_secs_f64();
+        rep.records = summary.imu_samples as u64;
+        rep.scratch_bytes = self.epochs.bytes() + imu_spill.bytes() + bwd.bytes();
+        // Forward epochs with the backward ones in time order, matched by IMU time.
+        let mut bk = bwd.backward().map_err(io_err("backward"))?;
+        let mut next_b = || -> Result<Option<(Nominal, DVector<f64>)>, Error> {
+            match bk.next_entry().map_err(io_err("backward"))? {
+                Some(bytes) => {
+                    let mut d = Dec::new(bytes);
+                    let m = codec::get_nominal(&mut d, n, &src).map_err(io_err("backward"))?;
+                    Ok(Some((m, d.vec(n).map_err(io_err("backward"))?)))
+                }
+                None => Ok(None),
+            }
+        };
+        let mut cur_b = next_b()?;
+        let b = bar(progress, self.epochs.len(), "smoothing: combining");
+        let mut ep = self.epochs.forward().map_err(io_err("epochs"))?;
+        let mut cadence = Cadence {
+            period: self.spec.separation_period_s,
+            last: None,
+        };
+        while let Some(bytes) = ep.next_entry().map_err(io_err("epochs"))? {
+            let e = get_epoch(bytes, n, &src, true).map_err(io_err("epochs"))?;
+            let t = e.nominal.nav.t;
+            while cur_b.as_ref().is_some_and(|(m, _)| m.nav.t < t - 1e-6) {
+                cur_b = next_b()?;
+            }
+            let var_f = e.var.unwrap_or_else(|| DVector::zeros(n));
+            let (m, var, sep) = match &cur_b {
+                Some((mb, var_b)) if (mb.nav.t - t).abs() <= 1e-6 => {
+                    let (m, var) = combine(layout, &e.nominal, &var_f, mb, var_b);
+                    let d = difference(layout, &e.nominal, mb);
+                    let v: Vec<f64> = (0..9).map(|i| var_f[i] + var_b[i]).collect();
+                    (m, var, Some((d, v)))
+                }
+                _ => {
+                    rep.forward_only += 1;
+                    (e.nominal.clone(), var_f, None)
+                }
+            };
+            let out = output(self.week, &m, &var, base, e.integrity, layout);
+            if let Some((d, v)) = sep {
+                if cadence.due(t) {
+                    let row = separation_row(&out.record, &d, |i| v[i], self.spec.separation_sigma);
+                    rep.separation_rows += 1;
+                    rep.separation_flagged += u64::from(row.flagged);
+                    rep.separation_max_ratio = rep.separation_max_ratio.max(row.max_ratio);
+                    sink.separation(&row)?;
+                }
             }
             sink.smoothed(&out)?;
             rep.epochs += 1;
