@@ -1,6 +1,6 @@
 //! Two estimates of one epoch: their difference in error-state terms and their
 //! combination weighted by their variances, state by state (Inertial Explorer's
-//! combined forward/reverse solution; REFERENCES \[GRO13\] §3.4.2, the
+//! combined forward/reverse solution; REFERENCES \[FP69\], the
 //! two-filter smoother with the cross-covariances of each state dropped).
 
 use super::nominal::{is_source_block, Nominal};

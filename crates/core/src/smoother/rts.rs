@@ -1,5 +1,5 @@
 //! The backward pass of the Rauch-Tung-Striebel smoother over the records of a
-//! closed-loop error-state filter (REFERENCES \[RTS65\], \[GRO13\] §3.4.2; the
+//! closed-loop error-state filter (REFERENCES \[RTS65\], \[SARKKA\] ch. 8; the
 //! feedback resets as in docs/ALGORITHMS.md "Smoothing").
 //!
 //! Record k: transition Phi_k from record k-1 and its noise Q_k (so the prior
