@@ -37,7 +37,7 @@ pub(super) fn convert(t: &TSmoother) -> KResult<SmootherSpec> {
 }
 
 pub(super) fn to_toml(s: &SmootherSpec) -> Option<TSmoother> {
-    (*s != SmootherSpec::default()).then(|| TSmoother {
+    (*s != SmootherSpec::default()).then_some(TSmoother {
         enabled: Some(s.enabled),
         mode: Some(s.mode),
         separation_sigma: Some(s.separation_sigma),
