@@ -28,6 +28,9 @@ pub struct FileSink {
     dir: PathBuf,
     main: Threaded,
     smoothed: Threaded,
+    /// smoothed.csv on a thread of its own: after the forward run the writers are
+    /// the bottleneck and the navigator's core is free.
+    smoothed_csv: Threaded,
     states: Option<StatesWriter>,
     separation: Option<SeparationWriter>,
 }
@@ -116,6 +119,7 @@ impl FileSink {
             dir: dir.to_path_buf(),
             main: Threaded::default(),
             smoothed: Threaded::default(),
+            smoothed_csv: Threaded::default(),
             states: None,
             separation: None,
         })
@@ -200,7 +204,10 @@ impl SolutionSink for FileSink {
             csv: true,
             ..layout.base
         };
-        self.smoothed = Threaded::start(record_writers(&self.dir, "smoothed", &base, files)?);
+        let mut writers = record_writers(&self.dir, "smoothed", &base, files)?;
+        let csv = writers.split_off(writers.len() - 1);
+        self.smoothed = Threaded::start(writers);
+        self.smoothed_csv = Threaded::start(csv);
         if !layout.state_names.is_empty() {
             files.push(self.dir.join("smoothed_states.csv"));
             let p = files.last().unwrap();
@@ -213,6 +220,7 @@ impl SolutionSink for FileSink {
 
     fn smoothed(&mut self, epoch: &SmoothedEpoch) -> Result<(), Error> {
         self.smoothed.push(&epoch.record)?;
+        self.smoothed_csv.push(&epoch.record)?;
         if let Some(w) = self.states.as_mut() {
             let r = &epoch.record;
             w.write(r.gps_week, r.nav.t, &epoch.states, &epoch.states_std)?;
@@ -229,9 +237,11 @@ impl SolutionSink for FileSink {
 
     fn end_smoothed(&mut self) -> Result<(), Error> {
         let records = self.smoothed.end(&self.dir);
+        let csv = self.smoothed_csv.end(&self.dir);
         let states = self.states.take().map_or(Ok(()), |w| w.finish());
         let sep = self.separation.take().map_or(Ok(()), |w| w.finish());
         records?;
+        csv?;
         states?;
         Ok(sep?)
     }

@@ -28,7 +28,8 @@ fn smoother_section_converts_and_round_trips() {
     assert_eq!(c.smoother, SmootherSpec::default());
     assert!(!c.smoother.enabled);
     // A mode alone turns it on.
-    let text = base() + "\n[smoother]\nmode = \"combined\"\nseparation_sigma = 4\nseparation_period_s = 0\n";
+    let text = base()
+        + "\n[smoother]\nmode = \"combined\"\nseparation_sigma = 4\nseparation_period_s = 0\n";
     let c = parse_toml_str(&text, &path).unwrap();
     assert!(c.smoother.enabled);
     assert_eq!(c.smoother.mode, SmootherMode::Combined);
