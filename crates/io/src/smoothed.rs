@@ -101,11 +101,13 @@ impl StatesWriter {
         line.extend_from_slice(gps_week.to_string().as_bytes());
         line.push(b',');
         push_fixed9(line, t);
+        // Shortest round-trip decimal of each value (zmij, as serde_json writes).
+        let mut b = zmij::Buffer::new();
         for (v, s) in values.iter().zip(std) {
             line.push(b',');
-            line.extend_from_slice(format!("{v:.12e}").as_bytes());
+            line.extend_from_slice(b.format(*v).as_bytes());
             line.push(b',');
-            line.extend_from_slice(format!("{s:.6e}").as_bytes());
+            line.extend_from_slice(b.format(*s).as_bytes());
         }
         line.push(b'\n');
         self.out.put()

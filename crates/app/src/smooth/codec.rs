@@ -19,6 +19,9 @@ impl Enc {
     pub fn u(&mut self, v: u64) {
         self.0.extend_from_slice(&v.to_le_bytes());
     }
+    fn u32(&mut self, v: usize) {
+        self.0.extend_from_slice(&(v as u32).to_le_bytes());
+    }
     pub fn fs<'a>(&mut self, v: impl IntoIterator<Item = &'a f64>) {
         for x in v {
             self.f(*x);
@@ -61,6 +64,14 @@ impl<'a> Dec<'a> {
     pub fn u(&mut self) -> std::io::Result<u64> {
         Ok(u64::from_le_bytes(self.take()?))
     }
+    fn u32(&mut self) -> std::io::Result<usize> {
+        if self.b.len() < 4 {
+            return Err(short());
+        }
+        let (h, t) = self.b.split_at(4);
+        self.b = t;
+        Ok(u32::from_le_bytes(h.try_into().unwrap()) as usize)
+    }
     fn v3(&mut self) -> std::io::Result<Vector3<f64>> {
         Ok(Vector3::new(self.f()?, self.f()?, self.f()?))
     }
@@ -99,7 +110,7 @@ pub(crate) fn put_record(e: &mut Enc, r: &RtsRecord) {
             .collect();
         e.u(nz.len() as u64);
         for (k, v) in nz {
-            e.u(k as u64);
+            e.u32(k);
             e.f(v);
         }
     }
@@ -112,7 +123,7 @@ pub(crate) fn put_record(e: &mut Enc, r: &RtsRecord) {
             .collect();
         e.u(nz.len() as u64);
         for (k, v) in nz {
-            e.u(k as u64);
+            e.u32(k);
             e.f(v);
         }
     }
@@ -129,7 +140,7 @@ pub(crate) fn get_record(b: &[u8]) -> std::io::Result<RtsRecord> {
         let mut phi = DMatrix::identity(n, n);
         let nz = d.u()? as usize;
         for _ in 0..nz {
-            let k = d.u()? as usize;
+            let k = d.u32()?;
             let v = d.f()?;
             *phi.as_mut_slice().get_mut(k).ok_or_else(short)? = v;
         }
@@ -141,7 +152,7 @@ pub(crate) fn get_record(b: &[u8]) -> std::io::Result<RtsRecord> {
         let mut q = DMatrix::zeros(n, n);
         let nz = d.u()? as usize;
         for _ in 0..nz {
-            let k = d.u()? as usize;
+            let k = d.u32()?;
             let v = d.f()?;
             if k >= n * n {
                 return Err(short());

@@ -14,6 +14,7 @@ use codec::{Dec, Enc};
 use indicatif::{ProgressBar, ProgressStyle};
 use nalgebra::DVector;
 use navfuse_core::smoother::combine::{combine, difference};
+use navfuse_core::smoother::rts::{Gain, GainMaker};
 use navfuse_core::smoother::{self, extra_names, Nominal, RtsBackward, RtsRecord};
 use navfuse_core::state::{StateLayout, ATT, N_INS};
 use navfuse_core::time::split_week;
@@ -82,10 +83,78 @@ pub(crate) struct BackwardInputs<'a> {
     pub extra_sources: Option<navfuse_core::SourceFactory>,
 }
 
+/// The records' scratch file: encoded and written on a thread of its own while the
+/// forward run goes on (the navigator only hands the records over), then kept.
+enum RecordSpill {
+    Writing {
+        tx: std::sync::mpsc::SyncSender<RtsRecord>,
+        writer: std::thread::JoinHandle<std::io::Result<Spill>>,
+    },
+    Done(Spill),
+    Failed,
+}
+
+impl RecordSpill {
+    fn start(mut spill: Spill) -> Self {
+        let (tx, rx) = std::sync::mpsc::sync_channel::<RtsRecord>(256);
+        let writer = std::thread::spawn(move || {
+            let mut enc = Enc::default();
+            for r in rx {
+                enc.clear();
+                codec::put_record(&mut enc, &r);
+                spill.push(&enc.0)?;
+            }
+            spill.close()?;
+            Ok(spill)
+        });
+        RecordSpill::Writing { tx, writer }
+    }
+
+    fn send(&mut self, r: RtsRecord) -> Result<(), Error> {
+        if let RecordSpill::Writing { tx, .. } = self {
+            if tx.send(r).is_err() {
+                // The writer stopped: its error.
+                return self.finish();
+            }
+        }
+        Ok(())
+    }
+
+    /// Wait for the writer; its error, if it had one.
+    fn finish(&mut self) -> Result<(), Error> {
+        match std::mem::replace(self, RecordSpill::Failed) {
+            RecordSpill::Writing { tx, writer } => {
+                drop(tx);
+                let spill = writer
+                    .join()
+                    .map_err(|_| Error::Other("smoothing: the record writer panicked".into()))?
+                    .map_err(io_err("records"))?;
+                *self = RecordSpill::Done(spill);
+                Ok(())
+            }
+            done => {
+                *self = done;
+                Ok(())
+            }
+        }
+    }
+
+    /// The file (after `finish`).
+    fn spill(&mut self) -> Result<&mut Spill, Error> {
+        match self {
+            RecordSpill::Done(s) => Ok(s),
+            _ => Err(Error::Other(
+                "smoothing: the records' scratch file is not complete".into(),
+            )),
+        }
+    }
+}
+
 /// What the forward pass keeps for the smoother, on disk.
 pub(crate) struct ForwardLog {
     spec: SmootherSpec,
-    records: Spill,
+    /// The records' scratch file, on its writer thread during the forward run.
+    records: RecordSpill,
     epochs: Spill,
     imu: Option<Spill>,
     layout: Option<StateLayout>,
@@ -108,7 +177,7 @@ impl ForwardLog {
         };
         Ok(ForwardLog {
             spec: spec.clone(),
-            records: Spill::create(dir, "rts").map_err(e)?,
+            records: RecordSpill::start(Spill::create(dir, "rts").map_err(e)?),
             epochs: Spill::create(dir, "epochs").map_err(e)?,
             imu: match spec.mode {
                 SmootherMode::Combined => Some(Spill::create(dir, "imu").map_err(e)?),
@@ -134,9 +203,7 @@ impl ForwardLog {
     /// Keep a record of the forward filter.
     pub fn record(&mut self, r: RtsRecord) -> Result<(), Error> {
         if self.spec.mode == SmootherMode::Rts {
-            self.enc.clear();
-            codec::put_record(&mut self.enc, &r);
-            self.records.push(&self.enc.0).map_err(io_err("records"))?;
+            self.records.send(r)?;
         }
         Ok(())
     }
@@ -284,6 +351,7 @@ impl ForwardLog {
         inputs: &BackwardInputs,
     ) -> Result<SmootherReport, Error> {
         let t0 = Instant::now();
+        self.records.finish()?;
         let Some(layout) = self.layout.clone() else {
             return Err(Error::Other(
                 "smoothing: the forward run gave no output epoch".into(),
@@ -321,21 +389,48 @@ impl ForwardLog {
         rep: &mut SmootherReport,
     ) -> Result<(), Error> {
         let n = layout.len();
-        rep.records = self.records.len();
+        rep.records = self.records.spill()?.len();
         let dir = std::env::temp_dir();
         let mut smoothed = Spill::create(self.records_dir().as_deref().unwrap_or(&dir), "smoothed")
             .map_err(io_err("smoothed"))?;
         // Backward pass, last record first.
         let t_back = Instant::now();
         let b = bar(progress, rep.records, "smoothing: backward pass");
+        // The gains depend on the forward records only: made on a second thread,
+        // ahead of the recursion.
+        let mut rd = self
+            .records
+            .spill()?
+            .backward()
+            .map_err(io_err("records"))?;
+        let (tx, rx) = std::sync::mpsc::sync_channel::<Result<Gain, Error>>(64);
+        let maker = std::thread::spawn(move || {
+            let mut gm = GainMaker::new();
+            loop {
+                let g = match rd.next_entry() {
+                    Ok(None) => break,
+                    Ok(Some(bytes)) => codec::get_record(bytes)
+                        .map_err(io_err("records"))
+                        .and_then(|r| {
+                            gm.gain(r)
+                                .map_err(|e| Error::Other(format!("smoothing: {e}")))
+                        }),
+                    Err(e) => Err(io_err("records")(e)),
+                };
+                let failed = g.is_err();
+                if tx.send(g).is_err() || failed {
+                    break;
+                }
+            }
+            gm.pseudo_inverses
+        });
         let mut back = RtsBackward::new();
-        let mut rd = self.records.backward().map_err(io_err("records"))?;
         let mut k = 0u64;
-        while let Some(bytes) = rd.next_entry().map_err(io_err("records"))? {
-            let rec = codec::get_record(bytes).map_err(io_err("records"))?;
-            let var_fwd = rec.p_post.diagonal();
+        for g in rx {
+            let g = g?;
+            let var_fwd = g.forward_var();
             let s = back
-                .step(rec)
+                .smooth(g)
                 .map_err(|e| Error::Other(format!("smoothing: {e}")))?;
             self.enc.clear();
             codec::put_smoothed(&mut self.enc, &s, &var_fwd);
@@ -350,9 +445,11 @@ impl ForwardLog {
         if let Some(b) = &b {
             b.finish_and_clear();
         }
-        rep.pseudo_inverses = back.pseudo_inverses;
+        rep.pseudo_inverses = maker
+            .join()
+            .map_err(|_| Error::Other("smoothing: the gain thread panicked".into()))?;
         rep.backward_s = t_back.elapsed().as_secs_f64();
-        rep.scratch_bytes = self.records.bytes() + self.epochs.bytes() + smoothed.bytes();
+        rep.scratch_bytes = self.records.spill()?.bytes() + self.epochs.bytes() + smoothed.bytes();
         // Forward again: the epochs with the smoothed records in time order.
         let b = bar(progress, self.epochs.len(), "smoothing: output");
         let mut sm = smoothed.backward().map_err(io_err("smoothed"))?;
@@ -449,7 +546,7 @@ impl ForwardLog {
             v_n: last.nominal.nav.v_n,
             rpy: navfuse_core::attitude::euler_from_q_bn(&last.nominal.nav.q_bn),
         };
-        let dir = self.records.dir().unwrap_or_else(std::env::temp_dir);
+        let dir = self.epochs.dir().unwrap_or_else(std::env::temp_dir);
         let mut bwd = Spill::create(&dir, "backward").map_err(io_err("backward"))?;
         let imu_spill = self
             .imu
@@ -565,6 +662,6 @@ impl ForwardLog {
     }
 
     fn records_dir(&self) -> Option<std::path::PathBuf> {
-        self.records.dir()
+        self.epochs.dir()
     }
 }

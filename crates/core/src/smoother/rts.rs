@@ -45,24 +45,6 @@ impl std::fmt::Display for SmoothError {
 
 impl std::error::Error for SmoothError {}
 
-struct Later {
-    /// Phi - I (empty: identity).
-    phi: Vec<(usize, usize, f64)>,
-    q: Option<DMatrix<f64>>,
-    s_prior: DVector<f64>,
-    p_smoothed: DMatrix<f64>,
-}
-
-/// Feed the records from the last to the first; each step returns that record's
-/// smoothed estimate.
-#[derive(Default)]
-pub struct RtsBackward {
-    later: Option<Later>,
-    /// Records where P^- had to be inverted by eigen-decomposition (not positive
-    /// definite in floating point).
-    pub pseudo_inverses: u64,
-}
-
 /// Phi - I as its entries that are not zero: (row, column, value). Phi is mostly
 /// the identity (the INS error dynamics couple few states per step).
 fn off_identity(phi: &DMatrix<f64>) -> Vec<(usize, usize, f64)> {
@@ -121,70 +103,79 @@ fn mul(a: &DMatrix<f64>, b: &DMatrix<f64>, b_t: bool) -> DMatrix<f64> {
     out
 }
 
-impl RtsBackward {
+/// What the recursion needs of record k besides its successor's smoothed values: the
+/// gain C_k, I - C_k Phi_{k+1}, Q_{k+1}, and the record's own P_k^+ and dx_k. These
+/// depend on the forward filter only, so they can be made ahead (another thread)
+/// of the recursion that uses them.
+pub struct Gain {
+    pub t: f64,
+    /// C_k and I - C_k Phi; None for the last record (nothing after it).
+    c: Option<(DMatrix<f64>, DMatrix<f64>)>,
+    q: Option<DMatrix<f64>>,
+    p_post: DMatrix<f64>,
+    dx: DVector<f64>,
+}
+
+impl Gain {
+    /// The forward variances of the record (diagonal of P_k^+).
+    pub fn forward_var(&self) -> DVector<f64> {
+        self.p_post.diagonal()
+    }
+}
+
+/// Makes the [`Gain`]s from the records, last to first.
+#[derive(Default)]
+pub struct GainMaker {
+    /// The later record's Phi - I (empty: identity) and Q.
+    later: Option<(Vec<(usize, usize, f64)>, Option<DMatrix<f64>>)>,
+    /// Records where P^- had to be inverted by eigen-decomposition (not positive
+    /// definite in floating point).
+    pub pseudo_inverses: u64,
+}
+
+impl GainMaker {
     pub fn new() -> Self {
         Self::default()
     }
 
-    /// One step back: record k after record k+1 (or the last record).
-    pub fn step(&mut self, rec: RtsRecord) -> Result<SmoothedRecord, SmoothError> {
+    /// The gain of record k, given after record k+1 (or first, the last record).
+    pub fn gain(&mut self, rec: RtsRecord) -> Result<Gain, SmoothError> {
         let n = rec.dim();
-        let (s_post, p_smoothed) = match self.later.take() {
-            None => (DVector::zeros(n), rec.p_post.clone()),
-            Some(l) => {
-                if l.p_smoothed.nrows() != n {
+        let next = (
+            rec.phi.as_ref().map(off_identity).unwrap_or_default(),
+            rec.q,
+        );
+        let (c, q) = match self.later.replace(next) {
+            None => (None, None),
+            Some((phi, q)) => {
+                if q.as_ref().is_some_and(|q| q.nrows() != n) {
                     return Err(SmoothError(format!(
-                        "record at t = {:.3}: {n} states, the later record {}",
-                        rec.t,
-                        l.p_smoothed.nrows()
+                        "record at t = {:.3}: {n} states, the later record more or fewer",
+                        rec.t
                     )));
                 }
-                let phi_p = phi_mul(&l.phi, &rec.p_post);
+                let phi_p = phi_mul(&phi, &rec.p_post);
                 // P^- = Phi P^+ Phi^T + Q.
-                let mut p_prior = mul_phi_t(&phi_p, &l.phi);
-                if let Some(q) = &l.q {
+                let mut p_prior = mul_phi_t(&phi_p, &phi);
+                if let Some(q) = &q {
                     p_prior += q;
                 }
                 // C^T = (P^-)^-1 Phi P^+.
                 let c = self.solve_spd(&p_prior, &phi_p).transpose();
-                let s_post = &c * &l.s_prior;
-                let mut q_plus_ps = l.p_smoothed;
-                if let Some(q) = &l.q {
-                    q_plus_ps += q;
-                }
-                let mut i_c_phi = -mul_phi(&c, &l.phi);
+                let mut i_c_phi = -mul_phi(&c, &phi);
                 for i in 0..n {
                     i_c_phi[(i, i)] += 1.0;
                 }
-                let a = mul(&i_c_phi, &rec.p_post, false);
-                let mut p = mul(&a, &i_c_phi, true);
-                let cq = mul(&c, &q_plus_ps, false);
-                matmul(&mut p, &cq, &c, true, true);
-                symmetrize(&mut p);
-                (s_post, p)
+                (Some((c, i_c_phi)), q)
             }
         };
-        if !s_post.iter().all(|v| v.is_finite()) || !(0..n).all(|i| p_smoothed[(i, i)].is_finite())
-        {
-            return Err(SmoothError(format!(
-                "the smoothed estimate stopped being finite at t = {:.3}",
-                rec.t
-            )));
-        }
-        let s_prior = &s_post + &rec.dx;
-        let out = SmoothedRecord {
+        Ok(Gain {
             t: rec.t,
-            s_post,
-            s_prior: s_prior.clone(),
-            var: DVector::from_fn(n, |i, _| p_smoothed[(i, i)].max(0.0)),
-        };
-        self.later = Some(Later {
-            phi: rec.phi.as_ref().map(off_identity).unwrap_or_default(),
-            q: rec.q,
-            s_prior,
-            p_smoothed,
-        });
-        Ok(out)
+            c,
+            q,
+            p_post: rec.p_post,
+            dx: rec.dx,
+        })
     }
 
     /// X with P X = B for a symmetric positive semi-definite P: states with zero
@@ -226,6 +217,76 @@ impl RtsBackward {
             }
         }
         out
+    }
+}
+
+/// The recursion: feed the gains from the last record to the first; each call
+/// returns that record's smoothed estimate.
+#[derive(Default)]
+pub struct RtsBackward {
+    gains: GainMaker,
+    /// The later record's smoothed s^- and P|N.
+    later: Option<(DVector<f64>, DMatrix<f64>)>,
+}
+
+impl RtsBackward {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Records whose P^- needed an eigen-decomposition (made by [`RtsBackward::step`]).
+    pub fn pseudo_inverses(&self) -> u64 {
+        self.gains.pseudo_inverses
+    }
+
+    /// One step back: record k after record k+1 (or the last record).
+    pub fn step(&mut self, rec: RtsRecord) -> Result<SmoothedRecord, SmoothError> {
+        let g = self.gains.gain(rec)?;
+        self.smooth(g)
+    }
+
+    /// One step back with a gain made ahead ([`GainMaker`]).
+    pub fn smooth(&mut self, g: Gain) -> Result<SmoothedRecord, SmoothError> {
+        let n = g.p_post.nrows();
+        let (s_post, p_smoothed) = match (self.later.take(), g.c) {
+            (None, _) | (_, None) => (DVector::zeros(n), g.p_post),
+            (Some((s_prior_next, p_next)), Some((c, i_c_phi))) => {
+                if p_next.nrows() != n {
+                    return Err(SmoothError(format!(
+                        "record at t = {:.3}: {n} states, the later record {}",
+                        g.t,
+                        p_next.nrows()
+                    )));
+                }
+                let s_post = &c * &s_prior_next;
+                let mut q_plus_ps = p_next;
+                if let Some(q) = &g.q {
+                    q_plus_ps += q;
+                }
+                let a = mul(&i_c_phi, &g.p_post, false);
+                let mut p = mul(&a, &i_c_phi, true);
+                let cq = mul(&c, &q_plus_ps, false);
+                matmul(&mut p, &cq, &c, true, true);
+                symmetrize(&mut p);
+                (s_post, p)
+            }
+        };
+        if !s_post.iter().all(|v| v.is_finite()) || !(0..n).all(|i| p_smoothed[(i, i)].is_finite())
+        {
+            return Err(SmoothError(format!(
+                "the smoothed estimate stopped being finite at t = {:.3}",
+                g.t
+            )));
+        }
+        let s_prior = &s_post + &g.dx;
+        let out = SmoothedRecord {
+            t: g.t,
+            s_post,
+            s_prior: s_prior.clone(),
+            var: DVector::from_fn(n, |i, _| p_smoothed[(i, i)].max(0.0)),
+        };
+        self.later = Some((s_prior, p_smoothed));
+        Ok(out)
     }
 }
 
@@ -353,6 +414,6 @@ mod tests {
         let s = b.step(rec0).unwrap();
         assert!((s.s_post[0] - 0.25).abs() < 1e-12);
         assert_eq!(s.s_post[1], 0.0);
-        assert_eq!(b.pseudo_inverses, 0);
+        assert_eq!(b.pseudo_inverses(), 0);
     }
 }
