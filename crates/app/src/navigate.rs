@@ -24,6 +24,17 @@ pub(crate) fn navigate(
     job: &mut JobResult,
 ) -> Result<(), Error> {
     let warn = opts.warn;
+    if cfg.smoother.enabled
+        && matches!(
+            cfg.nav.gnss.fusion,
+            navfuse_core::config::GnssFusion::SixState { .. }
+        )
+    {
+        return Err(Error::Other(format!(
+            "{}: [smoother] (or --smooth) works on the error-state filter; gnss.fusion = \"six_state\" cannot be smoothed: use the default fusion or turn smoothing off",
+            cfg.source_path.display()
+        )));
+    }
     let inputs::Inputs {
         mut reader,
         imu_week,

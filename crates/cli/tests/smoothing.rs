@@ -351,3 +351,39 @@ fn spoofed_epochs_are_not_pulled_back_in() {
     assert!(sm <= fwd && sm < 5.0, "smoothed {sm} vs forward {fwd}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Smoothing a six-state run is refused before anything is read, naming the keys.
+#[test]
+fn six_state_fusion_is_refused_before_the_run() {
+    let dir = tmp("smooth-six");
+    std::fs::create_dir_all(&dir).unwrap();
+    let demo = repo().join("examples/demo");
+    let text = std::fs::read_to_string(demo.join("drive_excerpt.toml"))
+        .unwrap()
+        .replace(
+            "use_velocity = true",
+            "use_velocity = true\nfusion = \"six_state\"",
+        );
+    let cfg = demo.join(format!("_six_{}.toml", std::process::id()));
+    std::fs::write(&cfg, text).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_navfuse"))
+        .args([
+            "run",
+            cfg.to_str().unwrap(),
+            "--out",
+            dir.join("out").to_str().unwrap(),
+            "-q",
+            "--smooth",
+        ])
+        .output()
+        .unwrap();
+    let _ = std::fs::remove_file(&cfg);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("six_state") && err.contains("--smooth"),
+        "{err}"
+    );
+    assert!(!dir.join("out/solution.nav").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
