@@ -31,6 +31,8 @@ use std::time::Instant;
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SmootherReport {
     pub mode: &'static str,
+    /// The smoothed states beyond the 21 INS ones (smoothed_states.csv columns).
+    pub states: Vec<String>,
     /// Covariance epochs recorded by the forward pass (mode "rts").
     pub records: u64,
     /// Output epochs smoothed.
@@ -57,6 +59,7 @@ impl SmootherReport {
     pub fn to_json(&self) -> serde_json::Value {
         serde_json::json!({
             "mode": self.mode,
+            "states": self.states,
             "records": self.records,
             "epochs": self.epochs,
             "scratch_bytes": self.scratch_bytes,
@@ -366,6 +369,7 @@ impl ForwardLog {
             mode: rep.mode,
             state_names: extra_names(&layout),
         };
+        rep.states = slayout.state_names.clone();
         sink.begin_smoothed(&slayout, &mut job.files)?;
         let r = match self.spec.mode {
             SmootherMode::Rts => self.rts(&layout, base, sink, progress, &mut rep),
