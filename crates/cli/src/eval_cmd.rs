@@ -138,6 +138,12 @@ pub fn to_json(r: &EvalReport) -> Value {
             "vertical": stat_json(&r.vertical, 1.0),
             "3d": stat_json(&r.pos_3d, 1.0),
         },
+        "percentiles_m": {
+            "horizontal": { "p50": r.horizontal_pct[0], "p68": r.horizontal_pct[1], "p95": r.horizontal_pct[2], "p99": r.horizontal_pct[3] },
+            "3d": { "p50": r.pos_3d_pct[0], "p68": r.pos_3d_pct[1], "p95": r.pos_3d_pct[2], "p99": r.pos_3d_pct[3] },
+            "cep": r.horizontal_pct[0],
+            "r95": r.horizontal_pct[2],
+        },
     });
     if let Some(vel) = &r.vel {
         v["velocity_mps"] = json!({
@@ -148,6 +154,7 @@ pub fn to_json(r: &EvalReport) -> Value {
     if let Some(a) = &r.att {
         v["attitude_deg"] = json!({
             "roll": stat_json(&a[0], d), "pitch": stat_json(&a[1], d), "yaw": stat_json(&a[2], d),
+            "total": r.att_total.as_ref().map(|t| stat_json(t, d)),
         });
     }
     if !r.gaps.is_empty() {
@@ -206,6 +213,14 @@ pub fn to_text(r: &EvalReport) -> String {
         row("pitch [deg]", &a[1], d);
         row("yaw [deg]", &a[2], d);
     }
+    if let Some(t) = &r.att_total {
+        row("attitude total [deg]", t, d);
+    }
+    let (h, p) = (&r.horizontal_pct, &r.pos_3d_pct);
+    s.push_str(&format!(
+        "percentiles [m]      P50 (CEP)      P68   P95 (R95)      P99\nhorizontal    {:>12.4}{:>9.4}{:>12.4}{:>9.4}\n3d            {:>12.4}{:>9.4}{:>12.4}{:>9.4}\n",
+        h[0], h[1], h[2], h[3], p[0], p[1], p[2], p[3]
+    ));
     if !r.gaps.is_empty() {
         s.push_str(&format!(
             "outages: {}\n{:>14}{:>14}{:>8}{:>10}{:>10}{:>10}{:>10}\n",

@@ -2,11 +2,18 @@
 //! horizontal, vertical and 3D position errors, velocity and attitude errors, and
 //! per-outage maxima with their RMS (the KF-GINS paper's outage statistic).
 //!
-//! The solution is linearly interpolated to each reference epoch (attitude angles
-//! with wrapping); reference epochs outside the solution, or where the solution has a
-//! hole longer than `max_interp_gap_s`, are skipped and counted.
+//! The solution is linearly interpolated to each reference epoch (the attitude by
+//! spherical interpolation of the quaternions); reference epochs outside the
+//! solution, or where the solution has a hole longer than `max_interp_gap_s`, are
+//! skipped and counted.
+//!
+//! The attitude error is the rotation from the reference attitude to the solution's,
+//! C_err = C_b,ref^T C_b,sol, taken as a rotation vector in the reference body frame:
+//! its x, y, z components are the roll, pitch and yaw errors (equal to the Euler
+//! angle differences when level, and still meaningful near pitch +-90 deg, where
+//! Euler differences are not), its norm the total attitude error.
 
-use crate::attitude::{c_bn_from_euler, wrap_pi};
+use crate::attitude::{c_bn_from_euler, euler_from_q_bn, q_bn_from_euler, wrap_pi};
 use crate::earth::{lla_add_ned, lla_diff_ned};
 use crate::outage::Window;
 use nalgebra::Vector3;
@@ -108,8 +115,15 @@ pub struct EvalReport {
     pub pos_3d: Stat,
     /// Velocity N, E, D and 3D \[m/s\] (when both sides have velocity).
     pub vel: Option<[Stat; 4]>,
-    /// Roll, pitch, yaw \[rad\] (when both sides have attitude).
+    /// Roll, pitch, yaw \[rad\] (when both sides have attitude): body-frame
+    /// components of the rotation between the attitudes.
     pub att: Option<[Stat; 3]>,
+    /// The angle of that rotation \[rad\].
+    pub att_total: Option<Stat>,
+    /// Percentiles P50, P68, P95, P99 of the horizontal and of the 3D position error
+    /// \[m\] (P50 horizontal = CEP, P95 horizontal = R95).
+    pub horizontal_pct: [f64; 4],
+    pub pos_3d_pct: [f64; 4],
     pub gaps: Vec<GapReport>,
     /// RMS over gaps of each gap's maximum: horizontal, vertical, 3D \[m\], roll,
     /// pitch, yaw \[rad\]. None without gaps.
@@ -131,11 +145,10 @@ fn interpolate(a: &TrajPoint, b: &TrajPoint, t: f64) -> TrajPoint {
         _ => None,
     };
     let rpy = match (a.rpy, b.rpy) {
-        (Some(x), Some(y)) => Some(Vector3::new(
-            x.x + wrap_pi(y.x - x.x) * k,
-            x.y + (y.y - x.y) * k,
-            x.z + wrap_pi(y.z - x.z) * k,
-        )),
+        (Some(x), Some(y)) => {
+            let (qa, qb) = (q_bn_from_euler(&x), q_bn_from_euler(&y));
+            Some(euler_from_q_bn(&qa.slerp(&qb, k)))
+        }
         _ => None,
     };
     TrajPoint { t, lla, v_n, rpy }
@@ -159,6 +172,8 @@ pub fn evaluate(solution: &[TrajPoint], reference: &[TrajPoint], opts: &EvalOpti
         Acc::default(),
     ];
     let mut att = [Acc::default(), Acc::default(), Acc::default()];
+    let mut att_total = Acc::default();
+    let (mut all_h, mut all_3d) = (Vec::new(), Vec::new());
     let mut gaps: Vec<GapReport> = opts
         .gaps
         .iter()
@@ -198,6 +213,8 @@ pub fn evaluate(solution: &[TrajPoint], reference: &[TrajPoint], opts: &EvalOpti
         hz.add(h);
         vt.add(dp.z);
         p3.add(dp.norm());
+        all_h.push(h);
+        all_3d.push(dp.norm());
         if let (Some(vs), Some(vr)) = (s.v_n, r.v_n) {
             let dv = vs - vr;
             for k in 0..3 {
@@ -207,14 +224,13 @@ pub fn evaluate(solution: &[TrajPoint], reference: &[TrajPoint], opts: &EvalOpti
         }
         let mut da = None;
         if let (Some(a_s), Some(a_r)) = (s.rpy, r.rpy) {
-            let x = Vector3::new(
-                wrap_pi(a_s.x - a_r.x),
-                a_s.y - a_r.y,
-                wrap_pi(a_s.z - a_r.z),
-            );
+            // C_err = C_ref^T C_sol as a body-frame rotation vector.
+            let (q_s, q_r) = (q_bn_from_euler(&a_s), q_bn_from_euler(&a_r));
+            let x = (q_r.inverse() * q_s).scaled_axis();
             for k in 0..3 {
                 att[k].add(x[k]);
             }
+            att_total.add(x.norm());
             da = Some(x);
         }
         for g in gaps.iter_mut().filter(|g| r.t > g.start && r.t < g.end) {
@@ -246,7 +262,10 @@ pub fn evaluate(solution: &[TrajPoint], reference: &[TrajPoint], opts: &EvalOpti
     }
     if att[0].n > 0 {
         rep.att = Some([att[0].stat(), att[1].stat(), att[2].stat()]);
+        rep.att_total = Some(att_total.stat());
     }
+    rep.horizontal_pct = percentiles(&mut all_h);
+    rep.pos_3d_pct = percentiles(&mut all_3d);
     gaps.retain(|g| g.epochs > 0);
     if !gaps.is_empty() {
         let m = gaps.len() as f64;
@@ -264,6 +283,18 @@ pub fn evaluate(solution: &[TrajPoint], reference: &[TrajPoint], opts: &EvalOpti
     }
     rep.gaps = gaps;
     rep
+}
+
+/// P50, P68, P95, P99 of `v` (nearest rank; zeros when empty).
+fn percentiles(v: &mut [f64]) -> [f64; 4] {
+    if v.is_empty() {
+        return [0.0; 4];
+    }
+    v.sort_by(f64::total_cmp);
+    [0.50, 0.68, 0.95, 0.99].map(|p| {
+        let rank = (p * v.len() as f64).ceil() as usize;
+        v[rank.clamp(1, v.len()) - 1]
+    })
 }
 
 #[cfg(test)]
@@ -311,5 +342,46 @@ mod tests {
         assert_eq!(r.gaps[0].epochs, 2); // t = 3, 4
         assert!((r.gaps[0].max_horizontal - (0.3 + 2.0 / 3.0)).abs() < 1e-6);
         assert!((r.gap_rms.unwrap()[0] - r.gaps[0].max_horizontal).abs() < 1e-12);
+    }
+
+    /// Near pitch 90 deg the Euler angles of two close attitudes differ wildly; the
+    /// rotation between them is small.
+    #[test]
+    fn attitude_error_is_the_rotation_not_euler_differences() {
+        let base = Vector3::new(0.5, 1.0, 100.0);
+        let p = |t: f64, rpy: Vector3<f64>| TrajPoint {
+            t,
+            lla: base,
+            v_n: None,
+            rpy: Some(rpy),
+        };
+        // The reference at pitch 89.9 deg; the solution rotated 0.05 deg about the
+        // body y axis (pitch 89.95 deg), written with a different roll/yaw split.
+        let r_rpy = Vector3::new(0.3, 89.9f64.to_radians(), 1.0);
+        let q_r = q_bn_from_euler(&r_rpy);
+        let q_s = q_r
+            * nalgebra::UnitQuaternion::from_scaled_axis(Vector3::new(
+                0.0,
+                0.05f64.to_radians(),
+                0.0,
+            ));
+        let s_rpy = euler_from_q_bn(&q_s);
+        let sol = vec![p(0.5, s_rpy), p(1.5, s_rpy)];
+        let reference = vec![p(1.0, r_rpy)];
+        let r = evaluate(&sol, &reference, &EvalOptions::default());
+        let total = r.att_total.unwrap().max.to_degrees();
+        assert!((total - 0.05).abs() < 1e-6, "{total}");
+        let a = r.att.unwrap();
+        assert!((a[1].max.to_degrees() - 0.05).abs() < 1e-6);
+        assert!(a[0].max.to_degrees() < 1e-6 && a[2].max.to_degrees() < 1e-6);
+    }
+
+    #[test]
+    fn percentiles_by_nearest_rank() {
+        let mut v: Vec<f64> = (1..=100).map(f64::from).collect();
+        assert_eq!(percentiles(&mut v), [50.0, 68.0, 95.0, 99.0]);
+        assert_eq!(percentiles(&mut []), [0.0; 4]);
+        let mut one = [3.0];
+        assert_eq!(percentiles(&mut one), [3.0; 4]);
     }
 }
