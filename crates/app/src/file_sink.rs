@@ -132,7 +132,17 @@ impl FileSink {
 }
 
 /// Files of an earlier run that this run may not write.
-const STALE: [&str; 9] = [
+const STALE: [&str; 19] = [
+    "solution.pos",
+    "solution.nmea",
+    "solution.kml",
+    "solution.geojson",
+    "solution.gpx",
+    "smoothed.pos",
+    "smoothed.nmea",
+    "smoothed.kml",
+    "smoothed.geojson",
+    "smoothed.gpx",
     "events.log",
     "summary.json",
     "integrity.csv",
@@ -173,6 +183,10 @@ fn record_writers(
         let w = CsvWriter::create(files.last().unwrap(), layout.std, layout.integrity);
         writers.push(Box::new(w?));
     }
+    for f in layout.exports.iter() {
+        files.push(dir.join(f.file_name(stem)));
+        writers.push(f.create(files.last().unwrap())?);
+    }
     Ok(writers)
 }
 
@@ -205,7 +219,9 @@ impl SolutionSink for FileSink {
             ..layout.base
         };
         let mut writers = record_writers(&self.dir, "smoothed", &base, files)?;
-        let csv = writers.split_off(writers.len() - 1);
+        // smoothed.csv comes right after the KF-GINS tables.
+        let n_tables = 1 + usize::from(base.imu_err) + usize::from(base.std);
+        let csv = writers.split_off(n_tables);
         self.smoothed = Threaded::start(writers);
         self.smoothed_csv = Threaded::start(csv);
         if !layout.state_names.is_empty() {

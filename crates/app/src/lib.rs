@@ -21,6 +21,7 @@
 
 mod checks;
 mod error;
+mod export;
 mod file_sink;
 pub mod gnss_input;
 mod inputs;
@@ -34,6 +35,7 @@ mod summary;
 mod time_offset;
 
 pub use error::Error;
+pub use export::export_run;
 pub use file_sink::FileSink;
 pub use job::{run, run_job, run_job_opts, RunOptions};
 pub use navfuse_io::config::{self, RunConfig};

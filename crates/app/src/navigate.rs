@@ -122,6 +122,7 @@ pub(crate) fn navigate(
         std: cfg.output.std,
         csv: cfg.output.csv,
         integrity: monitor_on,
+        exports: navfuse_io::export::ExportSet::of(&cfg.output.formats),
     };
     job.integrity_table = monitor_on;
     sink.begin(&layout, &mut job.files)?;

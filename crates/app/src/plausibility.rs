@@ -223,25 +223,7 @@ pub fn time_offset_fit(tau_s: f64, rate: f64) -> Vec<Finding> {
     out
 }
 
-/// GPS - UTC \[s\] in the GPS week `week` (18 s when unknown): the leap seconds since 1999.
-pub fn leap_seconds(week: Option<u32>) -> f64 {
-    // First GPS week of each value: 1999-01-01, 2006-01-01, 2009-01-01, 2012-07-01,
-    // 2015-07-01, 2017-01-01.
-    const STEPS: [(u32, f64); 6] = [
-        (990, 13.0),
-        (1356, 14.0),
-        (1513, 15.0),
-        (1695, 16.0),
-        (1851, 17.0),
-        (1930, 18.0),
-    ];
-    let Some(w) = week else { return 18.0 };
-    STEPS
-        .iter()
-        .rev()
-        .find(|(from, _)| w >= *from)
-        .map_or(13.0, |s| s.1)
-}
+pub use navfuse_core::time::leap_seconds;
 
 /// The fit from a zero prior was implausible (`tau0_s`); a second fit started from
 /// plus or minus the leap seconds found `tau_s` with rate `rate` [s/s]: when that one

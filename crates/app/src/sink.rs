@@ -24,6 +24,9 @@ pub struct OutputLayout {
     /// The integrity monitor runs: records carry its flag; the CSV table (with the
     /// flag column) and integrity.csv are written.
     pub integrity: bool,
+    /// `[output] formats`: the exports a file sink writes beside the solution
+    /// (`solution.kml`, `solution.pos`, ...).
+    pub exports: navfuse_io::export::ExportSet,
 }
 
 /// What the smoothed output holds (when `[smoother]` is on).

@@ -81,9 +81,28 @@ enum Command {
         /// with the forward one). Default: the config's `[smoother] mode`, else rts.
         #[arg(long, value_name = "MODE", value_parser = ["rts", "combined"])]
         smooth_mode: Option<String>,
+        /// Exports beside solution.nav (and smoothed.nav), added to `[output]
+        /// formats`: comma-separated pos (RTKLIB, GPST), nmea (GGA, RMC, HDT in UTC),
+        /// kml, geojson, gpx (docs/FORMATS.md "Exports").
+        #[arg(long, value_name = "LIST")]
+        formats: Option<String>,
         /// No progress bar and no summary line.
         #[arg(long, short)]
         quiet: bool,
+    },
+    /// Write exports of a finished run: RUN_DIR/solution.nav (with --smoothed,
+    /// smoothed.nav) as RTKLIB .pos, NMEA, KML, GeoJSON or GPX beside it
+    /// (docs/FORMATS.md "Exports"); the .pos standard deviations come from std.txt
+    /// when it is there.
+    Export {
+        /// The output directory of `navfuse run`.
+        run_dir: PathBuf,
+        /// Comma-separated: pos, nmea, kml, geojson, gpx.
+        #[arg(long, value_name = "LIST")]
+        formats: String,
+        /// Export the smoothed solution (smoothed.nav) instead.
+        #[arg(long)]
+        smoothed: bool,
     },
     /// Score a solution against a reference trajectory.
     ///
@@ -243,6 +262,19 @@ enum Command {
     },
 }
 
+fn export_main(dir: &std::path::Path, formats: &str, smoothed: bool) -> anyhow::Result<()> {
+    let list = navfuse_io::export::ExportFormat::parse_list(formats)
+        .map_err(|e| anyhow::anyhow!("--formats: {e}"))?;
+    if list.is_empty() {
+        anyhow::bail!("--formats: no format given (pos, nmea, kml, geojson, gpx)");
+    }
+    let stem = if smoothed { "smoothed" } else { "solution" };
+    for f in navfuse_app::export_run(dir, stem, &list)? {
+        eprintln!("navfuse: wrote {}", f.display());
+    }
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
@@ -253,8 +285,21 @@ fn main() -> ExitCode {
             outages,
             smooth,
             smooth_mode,
+            formats,
             quiet,
-        } => run_cmd::main(config, kf_gins, out, outages, (smooth, smooth_mode), quiet),
+        } => run_cmd::main(
+            config,
+            kf_gins,
+            out,
+            outages,
+            (smooth, smooth_mode, formats),
+            quiet,
+        ),
+        Command::Export {
+            run_dir,
+            formats,
+            smoothed,
+        } => export_main(&run_dir, &formats, smoothed),
         Command::Eval {
             solution,
             truth,

@@ -15,7 +15,7 @@ pub fn main(
     kf_gins: Option<PathBuf>,
     out: Option<PathBuf>,
     outages: Option<String>,
-    (smooth, smooth_mode): (bool, Option<String>),
+    (smooth, smooth_mode, formats): (bool, Option<String>, Option<String>),
     quiet: bool,
 ) -> Result<()> {
     let path = kf_gins
@@ -34,6 +34,15 @@ pub fn main(
         let extra = OutageSchedule::parse(&spec).map_err(|e| anyhow::anyhow!("--outages: {e}"))?;
         cfg.nav.gnss.outages.windows.extend(extra.windows);
         cfg.nav.gnss.outages.periodic.extend(extra.periodic);
+    }
+    if let Some(list) = formats {
+        let extra = navfuse_io::export::ExportFormat::parse_list(&list)
+            .map_err(|e| anyhow::anyhow!("--formats: {e}"))?;
+        for f in extra {
+            if !cfg.output.formats.contains(&f) {
+                cfg.output.formats.push(f);
+            }
+        }
     }
     if smooth || smooth_mode.is_some() {
         cfg.smoother.enabled = true;

@@ -33,6 +33,26 @@ pub struct GpsTime {
     pub sow: f64,
 }
 
+/// GPS - UTC \[s\] in the GPS week `week` (18 s when unknown): the leap seconds since 1999.
+pub fn leap_seconds(week: Option<u32>) -> f64 {
+    // First GPS week of each value: 1999-01-01, 2006-01-01, 2009-01-01, 2012-07-01,
+    // 2015-07-01, 2017-01-01.
+    const STEPS: [(u32, f64); 6] = [
+        (990, 13.0),
+        (1356, 14.0),
+        (1513, 15.0),
+        (1695, 16.0),
+        (1851, 17.0),
+        (1930, 18.0),
+    ];
+    let Some(w) = week else { return 18.0 };
+    STEPS
+        .iter()
+        .rev()
+        .find(|(from, _)| w >= *from)
+        .map_or(13.0, |s| s.1)
+}
+
 /// A GPST calendar date and time of day (no leap seconds).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GpstCalendar {

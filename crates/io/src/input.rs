@@ -239,6 +239,8 @@ pub struct OutputSpec {
     pub std: bool,
     /// `solution.csv` with a header row.
     pub csv: bool,
+    /// Exports beside solution.nav (`solution.kml`, `.pos`, ...; export.rs).
+    pub formats: Vec<crate::export::ExportFormat>,
 }
 
 impl Default for OutputSpec {
@@ -249,6 +251,7 @@ impl Default for OutputSpec {
             imu_err: true,
             std: true,
             csv: false,
+            formats: Vec::new(),
         }
     }
 }

@@ -5,6 +5,7 @@ pub mod baro;
 pub mod config;
 pub mod dgps;
 pub mod error;
+pub mod export;
 pub mod fmt;
 pub mod gnss;
 pub mod heading;

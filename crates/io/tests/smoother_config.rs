@@ -53,3 +53,18 @@ fn smoother_section_converts_and_round_trips() {
         .to_string();
     assert!(e.contains("enable"), "{e}");
 }
+
+#[test]
+fn output_formats_convert_and_round_trip() {
+    let path = tmp("run_fmt.toml", "");
+    let text = base() + "\n[output]\nformats = [\"kml\", \"pos\"]\n";
+    let c = parse_toml_str(&text, &path).unwrap();
+    use navfuse_io::export::ExportFormat;
+    assert_eq!(c.output.formats, vec![ExportFormat::Kml, ExportFormat::Pos]);
+    let back = load(&tmp("rt_fmt.toml", &c.to_toml_string())).unwrap();
+    assert_eq!(back.output.formats, c.output.formats);
+    let e = parse_toml_str(&(base() + "\n[output]\nformats = [\"shp\"]\n"), &path)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("shp") || e.contains("formats"), "{e}");
+}

@@ -249,6 +249,7 @@ pub(super) fn kfgins_to_raw(y: KfYaml, w: &mut Vec<String>) -> KResult<(TomlRoot
             imu_err: Some(true),
             std: Some(true),
             csv: Some(false),
+            formats: None,
         },
     };
     Ok((raw, y.outputpath))

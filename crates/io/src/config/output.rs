@@ -4,6 +4,7 @@ use serde::{Deserialize, Serialize};
 
 use super::error::KResult;
 use super::validate::positive;
+use crate::export::ExportFormat;
 use crate::input::OutputSpec;
 
 #[derive(Debug, Default, Deserialize, Serialize)]
@@ -17,11 +18,17 @@ pub(super) struct TOutput {
     pub(super) std: Option<bool>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) csv: Option<bool>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) formats: Option<Vec<ExportFormat>>,
 }
 
 impl TOutput {
     pub(super) fn is_empty(&self) -> bool {
-        self.rate_hz.is_none() && self.imu_err.is_none() && self.std.is_none() && self.csv.is_none()
+        self.rate_hz.is_none()
+            && self.imu_err.is_none()
+            && self.std.is_none()
+            && self.csv.is_none()
+            && self.formats.is_none()
     }
 }
 
@@ -36,6 +43,7 @@ pub(super) fn convert(o: &TOutput) -> KResult<OutputSpec> {
         imu_err: o.imu_err.unwrap_or(d.imu_err),
         std: o.std.unwrap_or(d.std),
         csv: o.csv.unwrap_or(d.csv),
+        formats: o.formats.clone().unwrap_or(d.formats),
     })
 }
 
@@ -45,5 +53,6 @@ pub(super) fn to_toml(o: &OutputSpec) -> TOutput {
         imu_err: Some(o.imu_err),
         std: Some(o.std),
         csv: Some(o.csv),
+        formats: (!o.formats.is_empty()).then(|| o.formats.clone()),
     }
 }

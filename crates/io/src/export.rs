@@ -1,0 +1,413 @@
+//! Exports of a solution for the tools users already have (docs/FORMATS.md
+//! "Exports"): RTKLIB `.pos` (GPST, readable by `pos2kml` and `rtkplot`), NMEA 0183
+//! (GGA, RMC, HDT, UTC), KML, GeoJSON and GPX (maps; UTC in GPX). Each is a
+//! [`RecordWriter`], so `navfuse run` writes them beside solution.nav (`\[output\]
+//! formats`, `--formats`) and `navfuse export` from a finished run.
+//!
+//! The map formats and NMEA take at most one epoch per [`MAP_PERIOD_S`] (a 200 Hz
+//! track is too dense for a map or a serial log); `.pos` takes every epoch.
+
+use crate::error::InputError;
+use crate::fmt::push_fixed9;
+use crate::nav::{Out, RecordWriter, SolutionRecord};
+use crate::time::week_sow_to_calendar;
+use navfuse_core::attitude::{euler_from_q_bn, wrap_2pi};
+use navfuse_core::time::leap_seconds;
+use std::io::Write as _;
+use std::path::Path;
+
+/// Smallest interval between two epochs of the map and NMEA exports \[s\].
+pub const MAP_PERIOD_S: f64 = 0.1;
+
+/// An export format (`\[output\] formats`, `--formats`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ExportFormat {
+    Pos,
+    Nmea,
+    Kml,
+    Geojson,
+    Gpx,
+}
+
+impl ExportFormat {
+    pub const ALL: [ExportFormat; 5] = [
+        ExportFormat::Pos,
+        ExportFormat::Nmea,
+        ExportFormat::Kml,
+        ExportFormat::Geojson,
+        ExportFormat::Gpx,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            ExportFormat::Pos => "pos",
+            ExportFormat::Nmea => "nmea",
+            ExportFormat::Kml => "kml",
+            ExportFormat::Geojson => "geojson",
+            ExportFormat::Gpx => "gpx",
+        }
+    }
+
+    /// `STEM.EXT`.
+    pub fn file_name(self, stem: &str) -> String {
+        format!("{stem}.{}", self.name())
+    }
+
+    /// Comma-separated names, e.g. `kml,pos`; an error names the unknown one.
+    pub fn parse_list(s: &str) -> Result<Vec<ExportFormat>, String> {
+        let mut v = Vec::new();
+        for name in s.split(',').map(str::trim).filter(|n| !n.is_empty()) {
+            let f = Self::ALL
+                .into_iter()
+                .find(|f| f.name() == name.to_ascii_lowercase())
+                .ok_or_else(|| {
+                    format!(
+                        "unknown export format {name:?}: expected pos, nmea, kml, geojson or gpx"
+                    )
+                })?;
+            if !v.contains(&f) {
+                v.push(f);
+            }
+        }
+        Ok(v)
+    }
+
+    /// The writer of this format into `path`.
+    pub fn create(self, path: &Path) -> Result<Box<dyn RecordWriter>, InputError> {
+        let out = Out::create(path)?;
+        let w: Box<dyn RecordWriter> = match self {
+            ExportFormat::Pos => Box::new(PosWriter::new(out)?),
+            ExportFormat::Nmea => Box::new(NmeaWriter::new(out)),
+            ExportFormat::Kml => Box::new(MapWriter::new(out, Map::Kml)?),
+            ExportFormat::Geojson => Box::new(MapWriter::new(out, Map::Geojson)?),
+            ExportFormat::Gpx => Box::new(MapWriter::new(out, Map::Gpx)?),
+        };
+        Ok(w)
+    }
+}
+
+/// A set of export formats (small and `Copy`, for the output layout).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ExportSet(u8);
+
+impl ExportSet {
+    pub fn of(list: &[ExportFormat]) -> Self {
+        ExportSet(
+            list.iter()
+                .map(|f| 1u8 << ExportFormat::ALL.iter().position(|a| a == f).unwrap_or(0))
+                .fold(0, |a, b| a | b),
+        )
+    }
+
+    pub fn is_empty(self) -> bool {
+        self.0 == 0
+    }
+
+    pub fn iter(self) -> impl Iterator<Item = ExportFormat> {
+        ExportFormat::ALL
+            .into_iter()
+            .enumerate()
+            .filter(move |(i, _)| self.0 & (1 << i) != 0)
+            .map(|(_, f)| f)
+    }
+}
+
+fn push_f(line: &mut Vec<u8>, v: f64, decimals: usize) {
+    let _ = write!(line, "{v:.decimals$}");
+}
+
+/// Decimation of the map and NMEA exports.
+#[derive(Default)]
+struct Every {
+    last: Option<f64>,
+}
+
+impl Every {
+    fn due(&mut self, t_abs: f64) -> bool {
+        match self.last {
+            // 5 % slack: time tags jitter around a 10 Hz output.
+            Some(l) if t_abs - l < 0.95 * MAP_PERIOD_S => false,
+            _ => {
+                self.last = Some(t_abs);
+                true
+            }
+        }
+    }
+}
+
+fn abs_time(r: &SolutionRecord) -> f64 {
+    f64::from(r.gps_week) * navfuse_core::time::SECONDS_PER_WEEK + r.nav.t
+}
+
+/// RTKLIB solution file: GPST date and time, latitude, longitude \[deg\], ellipsoidal
+/// height \[m\], Q, ns, sdn sde sdu sdne sdeu sdun \[m\], age, ratio. Q is 5 ("single")
+/// for every epoch: RTKLIB has no code for an INS solution.
+pub struct PosWriter {
+    out: Out,
+}
+
+impl PosWriter {
+    fn new(mut out: Out) -> Result<Self, InputError> {
+        out.line.extend_from_slice(
+            b"% program   : navfuse (GNSS/INS solution exported as an RTKLIB position file)\n\
+% pos mode  : INS/GNSS integrated (Q = 5 for every epoch)\n\
+% elev mask : 0.0 deg\n\
+% ref pos   : none\n\
+%\n\
+% (lat/lon/height=WGS84/ellipsoidal,Q=1:fix,2:float,3:sbas,4:dgps,5:single,6:ppp,ns=# of satellites)\n\
+%  GPST                     latitude(deg) longitude(deg)  height(m)   Q  ns   sdn(m)   sde(m)   sdu(m)  sdne(m)  sdeu(m)  sdun(m) age(s)  ratio\n",
+        );
+        out.put()?;
+        Ok(PosWriter { out })
+    }
+}
+
+impl RecordWriter for PosWriter {
+    fn write_record(&mut self, r: &SolutionRecord) -> Result<(), InputError> {
+        let line = &mut self.out.line;
+        // Microseconds (RTKLIB's own files carry 3 decimals; it reads more).
+        let c = week_sow_to_calendar(r.gps_week, r.nav.t);
+        let us = (c.second * 1e6).round().min(59_999_999.0);
+        let _ = write!(
+            line,
+            "{:04}/{:02}/{:02} {:02}:{:02}:{:09.6} ",
+            c.year,
+            c.month,
+            c.day,
+            c.hour,
+            c.minute,
+            us / 1e6
+        );
+        let n = &r.nav;
+        push_f(line, n.lla.x.to_degrees(), 9);
+        line.push(b' ');
+        push_f(line, n.lla.y.to_degrees(), 9);
+        line.push(b' ');
+        push_f(line, n.lla.z, 4);
+        let sd = r.std.map_or([0.0; 3], |s| [s[0], s[1], s[2]]);
+        let _ = write!(
+            line,
+            "   5   0 {:8.4} {:8.4} {:8.4} {:8.4} {:8.4} {:8.4} {:6.2} {:6.1}\n",
+            sd[0], sd[1], sd[2], 0.0, 0.0, 0.0, 0.0, 0.0
+        );
+        self.out.put()
+    }
+    fn flush(&mut self) -> Result<(), InputError> {
+        self.out.flush()
+    }
+    fn finish_boxed(self: Box<Self>) -> Result<(), InputError> {
+        self.out.finish()
+    }
+}
+
+/// NMEA sentence `$BODY*CS\r\n` with the XOR checksum of BODY.
+pub fn nmea_sentence(body: &str) -> String {
+    let cs = body.bytes().fold(0u8, |a, b| a ^ b);
+    format!("${body}*{cs:02X}\r\n")
+}
+
+/// UTC calendar of a GPS time (GPS week, seconds of week).
+fn utc(r: &SolutionRecord) -> crate::time::Calendar {
+    let leap = leap_seconds(Some(r.gps_week));
+    week_sow_to_calendar(r.gps_week, r.nav.t - leap)
+}
+
+/// Degrees as NMEA `ddmm.mmmmmm` / `dddmm.mmmmmm` with the hemisphere letter.
+fn nmea_angle(deg: f64, lon: bool) -> (String, char) {
+    let hemi = match (lon, deg < 0.0) {
+        (false, false) => 'N',
+        (false, true) => 'S',
+        (true, false) => 'E',
+        (true, true) => 'W',
+    };
+    let a = deg.abs();
+    let mut d = a.floor();
+    let mut m = (a - d) * 60.0;
+    if m >= 59.999_999_5 {
+        d += 1.0;
+        m = 0.0;
+    }
+    let s = if lon {
+        format!("{:03}{:09.6}", d as u32, m)
+    } else {
+        format!("{:02}{:09.6}", d as u32, m)
+    };
+    (s, hemi)
+}
+
+/// NMEA 0183: GGA (fix quality 1; 6 = dead reckoning while the integrity monitor
+/// holds GNSS out), RMC, HDT per epoch (at most one per [`MAP_PERIOD_S`]), UTC from
+/// GPS time with the leap seconds of the epoch's week. The GGA altitude field holds
+/// the ellipsoidal height with a geoid separation of 0 (no geoid model here).
+pub struct NmeaWriter {
+    out: Out,
+    every: Every,
+}
+
+impl NmeaWriter {
+    fn new(out: Out) -> Self {
+        NmeaWriter {
+            out,
+            every: Every::default(),
+        }
+    }
+}
+
+impl RecordWriter for NmeaWriter {
+    fn write_record(&mut self, r: &SolutionRecord) -> Result<(), InputError> {
+        if !self.every.due(abs_time(r)) {
+            return Ok(());
+        }
+        let c = utc(r);
+        let hms = format!(
+            "{:02}{:02}{:05.2}",
+            c.hour,
+            c.minute,
+            (c.second * 100.0).floor() / 100.0
+        );
+        let date = format!("{:02}{:02}{:02}", c.day, c.month, c.year.rem_euclid(100));
+        let n = &r.nav;
+        let (lat, ns) = nmea_angle(n.lla.x.to_degrees(), false);
+        let (lon, ew) = nmea_angle(n.lla.y.to_degrees(), true);
+        let q = if matches!(r.gnss_integrity, Some(2)) {
+            6
+        } else {
+            1
+        };
+        let gga = format!(
+            "GPGGA,{hms},{lat},{ns},{lon},{ew},{q},00,,{:.3},M,0.000,M,,",
+            n.lla.z
+        );
+        let speed_kn = n.v_n.x.hypot(n.v_n.y) * 3600.0 / 1852.0;
+        let course = wrap_2pi(n.v_n.y.atan2(n.v_n.x)).to_degrees();
+        let rmc =
+            format!("GPRMC,{hms},A,{lat},{ns},{lon},{ew},{speed_kn:.3},{course:.2},{date},,,D");
+        let yaw = wrap_2pi(euler_from_q_bn(&n.q_bn).z).to_degrees();
+        let hdt = format!("GPHDT,{yaw:.3},T");
+        for s in [gga, rmc, hdt] {
+            self.out
+                .line
+                .extend_from_slice(nmea_sentence(&s).as_bytes());
+        }
+        self.out.put()
+    }
+    fn flush(&mut self) -> Result<(), InputError> {
+        self.out.flush()
+    }
+    fn finish_boxed(self: Box<Self>) -> Result<(), InputError> {
+        self.out.finish()
+    }
+}
+
+/// `lon,lat,h` (degrees with 9 decimals, metres with 3), as KML and GeoJSON order them.
+fn push_lon_lat_h(line: &mut Vec<u8>, lon: f64, lat: f64, h: f64) {
+    push_fixed9(line, lon);
+    line.push(b',');
+    push_fixed9(line, lat);
+    line.push(b',');
+    push_f(line, h, 3);
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum Map {
+    Kml,
+    Geojson,
+    Gpx,
+}
+
+/// A track as one line (KML `LineString`, GeoJSON `LineString` feature, GPX `trkseg`).
+pub struct MapWriter {
+    out: Out,
+    map: Map,
+    every: Every,
+    points: usize,
+}
+
+impl MapWriter {
+    fn new(mut out: Out, map: Map) -> Result<Self, InputError> {
+        let head: &[u8] = match map {
+            Map::Kml => b"<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<kml xmlns=\"http://www.opengis.net/kml/2.2\">\n<Document>\n<name>navfuse solution</name>\n<Style id=\"track\"><LineStyle><color>ff00ffff</color><width>2</width></LineStyle></Style>\n<Placemark>\n<name>track</name>\n<styleUrl>#track</styleUrl>\n<LineString>\n<altitudeMode>absolute</altitudeMode>\n<coordinates>\n",
+            Map::Geojson => b"{\"type\":\"FeatureCollection\",\"features\":[{\"type\":\"Feature\",\"properties\":{\"name\":\"navfuse solution\",\"height\":\"ellipsoidal [m]\"},\"geometry\":{\"type\":\"LineString\",\"coordinates\":[\n",
+            Map::Gpx => b"<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<gpx version=\"1.1\" creator=\"navfuse\" xmlns=\"http://www.topografix.com/GPX/1/1\">\n<trk><name>navfuse solution</name><trkseg>\n",
+        };
+        out.line.extend_from_slice(head);
+        out.put()?;
+        Ok(MapWriter {
+            out,
+            map,
+            every: Every::default(),
+            points: 0,
+        })
+    }
+}
+
+impl RecordWriter for MapWriter {
+    fn write_record(&mut self, r: &SolutionRecord) -> Result<(), InputError> {
+        if !self.every.due(abs_time(r)) {
+            return Ok(());
+        }
+        let n = &r.nav;
+        let (lat, lon, h) = (n.lla.x.to_degrees(), n.lla.y.to_degrees(), n.lla.z);
+        let line = &mut self.out.line;
+        match self.map {
+            Map::Kml => {
+                push_lon_lat_h(line, lon, lat, h);
+                line.push(b'\n');
+            }
+            Map::Geojson => {
+                if self.points > 0 {
+                    line.extend_from_slice(b",\n");
+                }
+                line.push(b'[');
+                push_lon_lat_h(line, lon, lat, h);
+                line.push(b']');
+            }
+            Map::Gpx => {
+                let c = utc(r);
+                let _ = write!(
+                    line,
+                    "<trkpt lat=\"{lat:.9}\" lon=\"{lon:.9}\"><ele>{h:.3}</ele><time>{:04}-{:02}-{:02}T{:02}:{:02}:{:06.3}Z</time></trkpt>\n",
+                    c.year, c.month, c.day, c.hour, c.minute, (c.second * 1000.0).floor() / 1000.0
+                );
+            }
+        }
+        self.points += 1;
+        self.out.put()
+    }
+    fn flush(&mut self) -> Result<(), InputError> {
+        self.out.flush()
+    }
+    fn finish_boxed(mut self: Box<Self>) -> Result<(), InputError> {
+        let tail: &[u8] = match self.map {
+            Map::Kml => b"</coordinates>\n</LineString>\n</Placemark>\n</Document>\n</kml>\n",
+            Map::Geojson => b"\n]}}]}\n",
+            Map::Gpx => b"</trkseg></trk>\n</gpx>\n",
+        };
+        self.out.line.extend_from_slice(tail);
+        self.out.put()?;
+        self.out.finish()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nmea_checksum_and_angles() {
+        // A sentence from the NMEA literature with its checksum.
+        assert_eq!(
+            nmea_sentence("GPGGA,123519,4807.038,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,"),
+            "$GPGGA,123519,4807.038,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,*47\r\n"
+        );
+        assert_eq!(nmea_angle(48.1173, false), ("4807.038000".into(), 'N'));
+        assert_eq!(nmea_angle(-11.5166667, true).1, 'W');
+        assert_eq!(nmea_angle(-11.5, true).0, "01130.000000");
+        assert!(
+            ExportFormat::parse_list("kml, POS,kml").unwrap()
+                == vec![ExportFormat::Kml, ExportFormat::Pos]
+        );
+        assert!(ExportFormat::parse_list("shp").unwrap_err().contains("shp"));
+    }
+}
