@@ -60,6 +60,7 @@ pub fn main(
     lever_arm: Option<String>,
     quality: &str,
     window: Option<String>,
+    errors_csv: Option<&Path>,
     json_out: bool,
 ) -> Result<()> {
     let sol = load_nav(solution)?;
@@ -99,6 +100,7 @@ pub fn main(
     let opts = EvalOptions {
         gaps: schedule.windows_in(t0, t1),
         lever_arm_b: lever_arm.as_deref().map(parse_vec3).transpose()?,
+        keep_epochs: errors_csv.is_some(),
         ..Default::default()
     };
     if opts.lever_arm_b.is_some() && sol.points.iter().any(|p| p.rpy.is_none()) {
@@ -111,12 +113,52 @@ pub fn main(
             truth.display(), t0, t1
         );
     }
+    if let Some(p) = errors_csv {
+        write_errors(p, &rep)?;
+    }
     if json_out {
         println!("{}", serde_json::to_string_pretty(&to_json(&rep))?);
     } else {
         print!("{}", to_text(&rep));
     }
     Ok(())
+}
+
+/// `--errors FILE.csv`: one line per scored epoch (empty fields where a side lacks
+/// velocity or attitude, or the track is too slow for along/cross).
+fn write_errors(path: &Path, r: &EvalReport) -> Result<()> {
+    use std::fmt::Write as _;
+    let mut t = String::from(
+        "t_s,d_north_m,d_east_m,d_down_m,horizontal_m,along_m,cross_m,d_vn_mps,d_ve_mps,d_vd_mps,d_roll_deg,d_pitch_deg,d_yaw_deg,d_att_deg\n",
+    );
+    let opt = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:.6}"));
+    for e in &r.per_epoch {
+        let _ = write!(
+            t,
+            "{:.6},{:.6},{:.6},{:.6},{:.6},{},{},",
+            e.t,
+            e.pos_ned.x,
+            e.pos_ned.y,
+            e.pos_ned.z,
+            e.horizontal,
+            opt(e.along_cross.map(|a| a.0)),
+            opt(e.along_cross.map(|a| a.1)),
+        );
+        let v = e.vel_ned;
+        let a = e.att.map(|a| a.map(f64::to_degrees));
+        let _ = writeln!(
+            t,
+            "{},{},{},{},{},{},{}",
+            opt(v.map(|v| v.x)),
+            opt(v.map(|v| v.y)),
+            opt(v.map(|v| v.z)),
+            opt(a.map(|a| a.x)),
+            opt(a.map(|a| a.y)),
+            opt(a.map(|a| a.z)),
+            opt(a.map(|a| a.norm())),
+        );
+    }
+    std::fs::write(path, t).with_context(|| format!("cannot write {}", path.display()))
 }
 
 fn stat_json(s: &Stat, scale: f64) -> Value {
@@ -145,6 +187,10 @@ pub fn to_json(r: &EvalReport) -> Value {
             "r95": r.horizontal_pct[2],
         },
     });
+    if let Some([a, c]) = &r.along_cross {
+        v["position_m"]["along_track"] = stat_json(a, 1.0);
+        v["position_m"]["cross_track"] = stat_json(c, 1.0);
+    }
     if let Some(vel) = &r.vel {
         v["velocity_mps"] = json!({
             "north": stat_json(&vel[0], 1.0), "east": stat_json(&vel[1], 1.0),
@@ -202,6 +248,10 @@ pub fn to_text(r: &EvalReport) -> String {
     row("horizontal [m]", &r.horizontal, 1.0);
     row("vertical [m]", &r.vertical, 1.0);
     row("3d [m]", &r.pos_3d, 1.0);
+    if let Some([a, c]) = &r.along_cross {
+        row("along-track [m]", a, 1.0);
+        row("cross-track [m]", c, 1.0);
+    }
     if let Some(v) = &r.vel {
         row("vel north [m/s]", &v[0], 1.0);
         row("vel east [m/s]", &v[1], 1.0);

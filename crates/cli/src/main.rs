@@ -108,9 +108,13 @@ enum Command {
     ///
     /// SOLUTION is a KF-GINS .nav file; TRUTH is a .nav file (IMU-centre state with
     /// attitude) or an RTKLIB .pos file (antenna positions; use --lever-arm to move the
-    /// solution to the antenna). Prints RMS and max of N/E/D, horizontal, vertical and 3D
-    /// position, velocity and roll/pitch/yaw errors; with --gaps also each outage's
-    /// maximum error and the RMS of those maxima.
+    /// solution to the antenna). Prints RMS, max and mean of N/E/D, horizontal,
+    /// vertical, 3D, along-track and cross-track position, velocity and attitude errors
+    /// (the rotation between the attitudes: roll/pitch/yaw components and the total
+    /// angle; none when the reference has no attitude), the P50/P68/P95/P99 of the
+    /// horizontal and 3D error (CEP = P50, R95 = P95 horizontal); with --gaps also each
+    /// outage's maximum error and the RMS of those maxima; --errors writes every
+    /// epoch's errors.
     Eval {
         /// The solution: a KF-GINS .nav file (11 columns; week 0 = seconds of week only).
         solution: PathBuf,
@@ -129,6 +133,11 @@ enum Command {
         /// Only score reference epochs in [start, end] (seconds, same time base).
         #[arg(long, value_name = "START:END")]
         window: Option<String>,
+        /// Write the per-epoch errors as CSV: t, position N E D, horizontal,
+        /// along-track, cross-track [m], velocity N E D [m/s], roll pitch yaw and total
+        /// attitude error [deg].
+        #[arg(long, value_name = "FILE.csv")]
+        errors: Option<PathBuf>,
         /// Machine-readable output.
         #[arg(long)]
         json: bool,
@@ -307,8 +316,18 @@ fn main() -> ExitCode {
             lever_arm,
             quality,
             window,
+            errors,
             json,
-        } => eval_cmd::main(&solution, &truth, gaps, lever_arm, &quality, window, json),
+        } => eval_cmd::main(
+            &solution,
+            &truth,
+            gaps,
+            lever_arm,
+            &quality,
+            window,
+            errors.as_deref(),
+            json,
+        ),
         Command::Sim {
             scenario,
             out,

@@ -143,3 +143,49 @@ fn unknown_format_is_refused() {
     let e = String::from_utf8_lossy(&out.stderr);
     assert!(e.contains("shp") && e.contains("geojson"), "{e}");
 }
+
+/// `navfuse eval --errors`: one row per scored epoch; along/cross-track in the JSON;
+/// no attitude figures against a reference without attitude (.pos).
+#[test]
+fn eval_writes_per_epoch_errors() {
+    let dir = tmp("eval-errors");
+    let out = dir.join("run");
+    navfuse_ok(&[
+        "run",
+        "examples/demo/drive_excerpt.toml",
+        "--out",
+        out.to_str().unwrap(),
+        "-q",
+    ]);
+    let csv = dir.join("errors.csv");
+    let j = navfuse_ok(&[
+        "eval",
+        out.join("solution.nav").to_str().unwrap(),
+        "examples/demo/gnss.pos",
+        "--lever-arm",
+        "0,-0.05,0",
+        "--errors",
+        csv.to_str().unwrap(),
+        "--json",
+    ]);
+    let v: serde_json::Value = serde_json::from_str(&j).unwrap();
+    let epochs = v["epochs"].as_u64().unwrap() as usize;
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert!(lines[0].starts_with("t_s,d_north_m"));
+    assert_eq!(lines.len(), epochs + 1);
+    assert!(v["position_m"]["along_track"]["rms"].as_f64().unwrap() > 0.0);
+    assert!(
+        v["percentiles_m"]["cep"].as_f64().unwrap() <= v["percentiles_m"]["r95"].as_f64().unwrap()
+    );
+    assert!(
+        v.get("attitude_deg").is_none(),
+        "a .pos reference has no attitude"
+    );
+    // The horizontal column equals hypot(north, east).
+    for l in &lines[1..] {
+        let f: Vec<f64> = l.split(',').take(5).map(|x| x.parse().unwrap()).collect();
+        assert!((f[1].hypot(f[2]) - f[4]).abs() < 2e-6, "{l}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

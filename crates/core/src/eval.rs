@@ -39,6 +39,8 @@ pub struct EvalOptions {
     pub lever_arm_b: Option<Vector3<f64>>,
     /// Do not interpolate across solution holes longer than this \[s\].
     pub max_interp_gap_s: f64,
+    /// Keep every scored epoch's errors in [`EvalReport::per_epoch`].
+    pub keep_epochs: bool,
 }
 
 impl Default for EvalOptions {
@@ -47,6 +49,7 @@ impl Default for EvalOptions {
             gaps: Vec::new(),
             lever_arm_b: None,
             max_interp_gap_s: 1.0,
+            keep_epochs: false,
         }
     }
 }
@@ -86,6 +89,26 @@ impl Acc {
         }
     }
 }
+
+/// Errors of one scored epoch (solution minus reference).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct EpochError {
+    pub t: f64,
+    /// Position N, E, D \[m\].
+    pub pos_ned: Vector3<f64>,
+    pub horizontal: f64,
+    /// Along-track (positive ahead) and cross-track (positive to the right) \[m\], by
+    /// the reference's horizontal velocity (or its track between neighbouring
+    /// epochs); None below 0.5 m/s.
+    pub along_cross: Option<(f64, f64)>,
+    /// Velocity N, E, D \[m/s\].
+    pub vel_ned: Option<Vector3<f64>>,
+    /// Attitude error, body-frame rotation vector (roll, pitch, yaw) \[rad\].
+    pub att: Option<Vector3<f64>>,
+}
+
+/// Below this horizontal speed the along/cross-track split is not made \[m/s\].
+const MIN_TRACK_SPEED_MPS: f64 = 0.5;
 
 /// Maxima inside one outage window.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -128,6 +151,10 @@ pub struct EvalReport {
     /// RMS over gaps of each gap's maximum: horizontal, vertical, 3D \[m\], roll,
     /// pitch, yaw \[rad\]. None without gaps.
     pub gap_rms: Option<[f64; 6]>,
+    /// Along-track and cross-track error \[m\] (epochs moving faster than 0.5 m/s).
+    pub along_cross: Option<[Stat; 2]>,
+    /// Every scored epoch (with `EvalOptions::keep_epochs`).
+    pub per_epoch: Vec<EpochError>,
 }
 
 fn interpolate(a: &TrajPoint, b: &TrajPoint, t: f64) -> TrajPoint {
@@ -173,6 +200,7 @@ pub fn evaluate(solution: &[TrajPoint], reference: &[TrajPoint], opts: &EvalOpti
     ];
     let mut att = [Acc::default(), Acc::default(), Acc::default()];
     let mut att_total = Acc::default();
+    let (mut along, mut cross) = (Acc::default(), Acc::default());
     let (mut all_h, mut all_3d) = (Vec::new(), Vec::new());
     let mut gaps: Vec<GapReport> = opts
         .gaps
@@ -185,7 +213,7 @@ pub fn evaluate(solution: &[TrajPoint], reference: &[TrajPoint], opts: &EvalOpti
         .collect();
     let mut j = 0usize;
     let mut first = true;
-    for r in reference {
+    for (ri, r) in reference.iter().enumerate() {
         while j + 1 < solution.len() && solution[j + 1].t < r.t {
             j += 1;
         }
@@ -222,6 +250,23 @@ pub fn evaluate(solution: &[TrajPoint], reference: &[TrajPoint], opts: &EvalOpti
             }
             vel[3].add(dv.norm());
         }
+        // The track direction: the reference velocity, else its neighbours.
+        let track = r.v_n.map(|v| (v.x, v.y)).or_else(|| {
+            let (p, q) = (reference.get(ri.checked_sub(1)?)?, reference.get(ri + 1)?);
+            let d = lla_diff_ned(&q.lla, &p.lla) / (q.t - p.t).max(1e-9);
+            Some((d.x, d.y))
+        });
+        let ac = track.and_then(|(vn, ve)| {
+            let speed = vn.hypot(ve);
+            (speed >= MIN_TRACK_SPEED_MPS).then(|| {
+                let (un, ue) = (vn / speed, ve / speed);
+                (dp.x * un + dp.y * ue, -dp.x * ue + dp.y * un)
+            })
+        });
+        if let Some((a, c)) = ac {
+            along.add(a);
+            cross.add(c);
+        }
         let mut da = None;
         if let (Some(a_s), Some(a_r)) = (s.rpy, r.rpy) {
             // C_err = C_ref^T C_sol as a body-frame rotation vector.
@@ -232,6 +277,16 @@ pub fn evaluate(solution: &[TrajPoint], reference: &[TrajPoint], opts: &EvalOpti
             }
             att_total.add(x.norm());
             da = Some(x);
+        }
+        if opts.keep_epochs {
+            rep.per_epoch.push(EpochError {
+                t: r.t,
+                pos_ned: dp,
+                horizontal: h,
+                along_cross: ac,
+                vel_ned: s.v_n.zip(r.v_n).map(|(a, b)| a - b),
+                att: da,
+            });
         }
         for g in gaps.iter_mut().filter(|g| r.t > g.start && r.t < g.end) {
             g.epochs += 1;
@@ -263,6 +318,9 @@ pub fn evaluate(solution: &[TrajPoint], reference: &[TrajPoint], opts: &EvalOpti
     if att[0].n > 0 {
         rep.att = Some([att[0].stat(), att[1].stat(), att[2].stat()]);
         rep.att_total = Some(att_total.stat());
+    }
+    if along.n > 0 {
+        rep.along_cross = Some([along.stat(), cross.stat()]);
     }
     rep.horizontal_pct = percentiles(&mut all_h);
     rep.pos_3d_pct = percentiles(&mut all_3d);
@@ -383,5 +441,35 @@ mod tests {
         assert_eq!(percentiles(&mut []), [0.0; 4]);
         let mut one = [3.0];
         assert_eq!(percentiles(&mut one), [3.0; 4]);
+    }
+
+    /// A solution 1 m ahead and 0.5 m to the right of a reference driving east.
+    #[test]
+    fn along_and_cross_track() {
+        let base = Vector3::new(0.5, 1.0, 100.0);
+        let east = Vector3::new(0.0, 10.0, 0.0);
+        let at = |t: f64, d: Vector3<f64>| TrajPoint {
+            t,
+            lla: lla_add_ned(&base, &(east * t + d)),
+            v_n: Some(east),
+            rpy: None,
+        };
+        // East is ahead; to the right of east is south (-north).
+        let sol: Vec<_> = (0..=20)
+            .map(|k| at(k as f64 * 0.5, Vector3::new(-0.5, 1.0, 0.0)))
+            .collect();
+        let reference: Vec<_> = (1..10).map(|k| at(k as f64, Vector3::zeros())).collect();
+        let opts = EvalOptions {
+            keep_epochs: true,
+            ..Default::default()
+        };
+        let r = evaluate(&sol, &reference, &opts);
+        let [a, c] = r.along_cross.unwrap();
+        assert!(
+            (a.mean - 1.0).abs() < 1e-6 && (c.mean - 0.5).abs() < 1e-6,
+            "{a:?} {c:?}"
+        );
+        assert_eq!(r.per_epoch.len(), 9);
+        assert!(r.per_epoch[0].att.is_none() && r.att.is_none());
     }
 }
