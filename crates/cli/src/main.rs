@@ -146,7 +146,8 @@ enum Command {
     /// measurements (RINEX 3), receiver fixes, dual-antenna heading, DGPS corrections,
     /// barometer.
     ///
-    /// Writes into DIR: truth.nav, imu.txt (or imu.csv), truth_imu_err.txt, and as the
+    /// Writes into DIR: truth.nav, truth.kml (the truth as a map, at most 10 Hz), imu.txt
+    /// (or imu.csv), truth_imu_err.txt, and as the
     /// scenario asks odometer.txt, gnss.txt, heading.txt, obs.rnx, nav.rnx, dgps.csv,
     /// gnss_errors.csv, events.csv, baro.txt, baro_truth.txt; plus run.toml (a navfuse run configuration for these
     /// files), scenario.toml (a copy) and sim_summary.json. Same scenario and seed give

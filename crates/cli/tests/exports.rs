@@ -189,3 +189,24 @@ fn eval_writes_per_epoch_errors() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `navfuse sim` writes the truth as KML beside truth.nav.
+#[test]
+fn simulator_writes_truth_kml() {
+    let dir = tmp("sim-kml");
+    common::simulate(&repo().join("scenarios/roundtrip_car.toml"), &dir);
+    let kml = std::fs::read_to_string(dir.join("truth.kml")).unwrap();
+    assert!(kml.trim_end().ends_with("</kml>"));
+    let coords = kml
+        .split("<coordinates>")
+        .nth(1)
+        .and_then(|c| c.split("</coordinates>").next())
+        .unwrap();
+    let n = coords.split_whitespace().count();
+    let nav = std::fs::read_to_string(dir.join("truth.nav"))
+        .unwrap()
+        .lines()
+        .count();
+    assert!(n > 10 && n <= nav, "{n} points for {nav} truth epochs");
+    let _ = std::fs::remove_dir_all(&dir);
+}

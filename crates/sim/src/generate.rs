@@ -13,8 +13,9 @@ use navfuse_gnss::constellation::{nominal_gps24, seed000_table3};
 use navfuse_gnss::ephemeris::GpsEphemeris;
 use navfuse_gnss::time::GpsTime;
 use navfuse_io::error::InputError;
+use navfuse_io::export::ExportFormat;
 use navfuse_io::fmt::push_fixed9;
-use navfuse_io::nav::{ImuErrWriter, NavWriter, SolutionRecord};
+use navfuse_io::nav::{ImuErrWriter, NavWriter, RecordWriter, SolutionRecord};
 use navfuse_io::rinex_nav::{read_rinex_nav, write_rinex3_nav_dated, RinexNav};
 use navfuse_io::rinex_obs::{ObsHeader, RinexObsWriter};
 
@@ -149,6 +150,9 @@ pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError>
     let truth_path = out_dir.join("truth.nav");
     let mut truth_out = NavWriter::create(&truth_path)?;
     files.push("truth.nav".into());
+    // The truth as a map (KML, at most 10 Hz: io export.rs).
+    let mut truth_kml = ExportFormat::Kml.create(&out_dir.join("truth.kml"))?;
+    files.push("truth.kml".into());
     let mut err_out = if sc.file.output.truth_imu_errors {
         files.push("truth_imu_err.txt".into());
         Some(ImuErrWriter::create(&out_dir.join("truth_imu_err.txt"))?)
@@ -303,6 +307,7 @@ pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError>
     let write_truth = |s: &TruthSample,
                        e: &ImuErrors,
                        tw: &mut NavWriter,
+                       kw: &mut Box<dyn RecordWriter>,
                        ew: &mut Option<ImuErrWriter>|
      -> Result<(), InputError> {
         let rec = SolutionRecord {
@@ -318,6 +323,7 @@ pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError>
             gnss_integrity: None,
         };
         tw.write(&rec)?;
+        kw.write_record(&rec)?;
         if let Some(w) = ew {
             w.write(&rec)?;
         }
@@ -327,6 +333,7 @@ pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError>
         &cur,
         &imu_model.current_errors().to_core(),
         &mut truth_out,
+        &mut truth_kml,
         &mut err_out,
     )?;
     summary.truth_epochs += 1;
@@ -472,6 +479,7 @@ pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError>
                 &cur,
                 &imu_model.current_errors().to_core(),
                 &mut truth_out,
+                &mut truth_kml,
                 &mut err_out,
             )?;
             summary.truth_epochs += 1;
@@ -513,6 +521,7 @@ pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError>
 
     imu_out.finish()?;
     truth_out.finish()?;
+    truth_kml.finish_boxed()?;
     if let Some(w) = err_out {
         w.finish()?;
     }
