@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{repo, shared, tmp};
+use common::{eval_json, num as f, repo, shared, tmp};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -26,26 +26,6 @@ fn run_ok(args: &[&str]) -> String {
     let (ok, stdout, stderr) = navfuse(args);
     assert!(ok, "navfuse {args:?} failed:\n{stderr}");
     stdout
-}
-
-fn eval_json(solution: &Path, truth: &Path, extra: &[&str]) -> Value {
-    let mut args = vec![
-        "eval",
-        solution.to_str().unwrap(),
-        truth.to_str().unwrap(),
-        "--json",
-    ];
-    args.extend_from_slice(extra);
-    serde_json::from_str(&run_ok(&args)).expect("eval --json output")
-}
-
-fn f(v: &Value, path: &[&str]) -> f64 {
-    let mut x = v;
-    for k in path {
-        x = &x[*k];
-    }
-    x.as_f64()
-        .unwrap_or_else(|| panic!("no number at {path:?} in {v}"))
 }
 
 /// Stand-in, unchanged KF-GINS demo configuration: horizontal RMS <= 10.1 mm and yaw RMS

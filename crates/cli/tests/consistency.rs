@@ -13,69 +13,10 @@
 
 mod common;
 
-use common::{repo, run, simulate_seed, tmp};
-use nalgebra::Vector3;
-use navfuse_core::earth::lla_diff_ned;
+use common::{nees, nees_band as band, repo, run, simulate_seed, tmp};
 use navfuse_io::config;
-use navfuse_io::nav::read_nav;
-use std::collections::HashMap;
-use std::path::Path;
 
 const RUNS: usize = 20;
-
-/// std.txt: t, then position N E D [m], velocity N E D [m/s], attitude [deg], ...
-fn read_std(path: &Path) -> HashMap<i64, [f64; 9]> {
-    std::fs::read_to_string(path)
-        .unwrap()
-        .lines()
-        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
-        .map(|l| {
-            let v: Vec<f64> = l.split_whitespace().map(|x| x.parse().unwrap()).collect();
-            let mut s = [0.0; 9];
-            s.copy_from_slice(&v[1..10]);
-            ((v[0] * 100.0).round() as i64, s)
-        })
-        .collect()
-}
-
-/// Per second after the first minute: (position, velocity, attitude) NEES.
-fn nees(dir: &Path, out: &Path) -> Vec<[f64; 3]> {
-    let key = |t: f64| (t * 100.0).round() as i64;
-    let truth: HashMap<i64, navfuse_core::NavState> = read_nav(&dir.join("truth.nav"))
-        .unwrap()
-        .into_iter()
-        .map(|(_, s)| (key(s.t), s))
-        .collect();
-    let std = read_std(&out.join("std.txt"));
-    let sol = read_nav(&out.join("solution.nav")).unwrap();
-    let t0 = sol[0].1.t;
-    let norm2 = |e: Vector3<f64>, s: &[f64]| (0..3).map(|i| (e[i] / s[i]).powi(2)).sum::<f64>();
-    sol.iter()
-        .filter(|(_, s)| s.t - t0 >= 60.0)
-        .filter_map(|(_, s)| {
-            let (tr, sd) = (truth.get(&key(s.t))?, std.get(&key(s.t))?);
-            let e_pos = lla_diff_ned(&s.lla, &tr.lla);
-            let e_vel = s.v_n - tr.v_n;
-            // Rotation from the true to the estimated attitude, in n [deg].
-            let e_att = (s.q_bn * tr.q_bn.inverse())
-                .scaled_axis()
-                .map(f64::to_degrees);
-            Some([
-                norm2(e_pos, &sd[0..3]),
-                norm2(e_vel, &sd[3..6]),
-                norm2(e_att, &sd[6..9]),
-            ])
-        })
-        .collect()
-}
-
-/// Two-sided 95 % band of the N-run average NEES of 3 dof (Wilson-Hilferty).
-fn band(n: usize) -> (f64, f64) {
-    let k = 3.0 * n as f64;
-    let a = 2.0 / (9.0 * k);
-    let q = |z: f64| k * (1.0 - a + z * a.sqrt()).powi(3) / n as f64;
-    (q(-1.959964), q(1.959964))
-}
 
 #[test]
 fn nees_is_consistent_with_gauss_markov_fix_errors() {
@@ -101,7 +42,11 @@ fn nees_is_consistent_with_gauss_markov_fix_errors() {
             std::fs::write(&toml, c.to_toml_string()).unwrap();
             let out = dir.join(format!("out{v}"));
             run(&toml, &out);
-            let e = nees(&dir, &out);
+            let e = nees(
+                &dir.join("truth.nav"),
+                &out.join("solution.nav"),
+                &out.join("std.txt"),
+            );
             let s = &mut sums[v];
             if s.is_empty() {
                 s.resize(e.len(), [0.0; 3]);

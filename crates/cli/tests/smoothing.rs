@@ -5,34 +5,13 @@
 
 mod common;
 
-use common::{repo, run_with, shared, simulate_seed, tmp};
-use nalgebra::Vector3;
-use navfuse_core::earth::lla_diff_ned;
+use common::{
+    eval_json, nees, nees_band as band, num as f, read_std, repo, run_with, shared, simulate_seed,
+    tmp,
+};
 use navfuse_io::config;
-use navfuse_io::nav::read_nav;
 use serde_json::Value;
-use std::collections::HashMap;
 use std::path::Path;
-
-fn eval_json(solution: &Path, truth: &Path, extra: &[&str]) -> Value {
-    let mut args = vec![
-        "eval",
-        solution.to_str().unwrap(),
-        truth.to_str().unwrap(),
-        "--json",
-    ];
-    args.extend_from_slice(extra);
-    serde_json::from_str(&common::navfuse_ok(&args)).expect("eval --json output")
-}
-
-fn f(v: &Value, path: &[&str]) -> f64 {
-    let mut x = v;
-    for k in path {
-        x = &x[*k];
-    }
-    x.as_f64()
-        .unwrap_or_else(|| panic!("no number at {path:?} in {v}"))
-}
 
 /// A config file `dir/NAME.toml` from `cfg` with the output at `rate_hz`.
 fn write_cfg(
@@ -158,55 +137,6 @@ fn drive_outages_with_nhc() {
         .contains("mounting_pitch_rad"));
     assert!(out.join("separation.csv").is_file());
     let _ = std::fs::remove_dir_all(&out);
-}
-
-/// KF-GINS STD file: t, then 21 standard deviations (KF-GINS units).
-fn read_std(path: &Path) -> HashMap<i64, Vec<f64>> {
-    std::fs::read_to_string(path)
-        .unwrap()
-        .lines()
-        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
-        .map(|l| {
-            let v: Vec<f64> = l.split_whitespace().map(|x| x.parse().unwrap()).collect();
-            ((v[0] * 100.0).round() as i64, v[1..].to_vec())
-        })
-        .collect()
-}
-
-/// Per epoch after the first minute: (position, velocity, attitude) NEES.
-fn nees(truth: &Path, sol: &Path, std: &Path) -> Vec<[f64; 3]> {
-    let key = |t: f64| (t * 100.0).round() as i64;
-    let truth: HashMap<i64, navfuse_core::NavState> = read_nav(truth)
-        .unwrap()
-        .into_iter()
-        .map(|(_, s)| (key(s.t), s))
-        .collect();
-    let std = read_std(std);
-    let sol = read_nav(sol).unwrap();
-    let t0 = sol[0].1.t;
-    let norm2 = |e: Vector3<f64>, s: &[f64]| (0..3).map(|i| (e[i] / s[i]).powi(2)).sum::<f64>();
-    sol.iter()
-        .filter(|(_, s)| s.t - t0 >= 60.0)
-        .filter_map(|(_, s)| {
-            let (tr, sd) = (truth.get(&key(s.t))?, std.get(&key(s.t))?);
-            let e_att = (s.q_bn * tr.q_bn.inverse())
-                .scaled_axis()
-                .map(f64::to_degrees);
-            Some([
-                norm2(lla_diff_ned(&s.lla, &tr.lla), &sd[0..3]),
-                norm2(s.v_n - tr.v_n, &sd[3..6]),
-                norm2(e_att, &sd[6..9]),
-            ])
-        })
-        .collect()
-}
-
-/// Two-sided 95 % band of the N-run average NEES of 3 dof (Wilson-Hilferty).
-fn band(n: usize) -> (f64, f64) {
-    let k = 3.0 * n as f64;
-    let a = 2.0 / (9.0 * k);
-    let q = |z: f64| k * (1.0 - a + z * a.sqrt()).powi(3) / n as f64;
-    (q(-1.959964), q(1.959964))
 }
 
 /// 20 seeds of scenarios/consistency_car.toml (Gauss-Markov fix errors, their

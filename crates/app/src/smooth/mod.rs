@@ -56,6 +56,30 @@ pub struct SmootherReport {
 }
 
 impl SmootherReport {
+    /// Hand one smoothed epoch, and its separation row when one is due, to the sink.
+    fn emit(
+        &mut self,
+        sink: &mut dyn SolutionSink,
+        out: &SmoothedEpoch,
+        row: Option<SeparationRow>,
+        bar: &Option<ProgressBar>,
+    ) -> Result<(), Error> {
+        if let Some(row) = row {
+            self.separation_rows += 1;
+            self.separation_flagged += u64::from(row.flagged);
+            self.separation_max_ratio = self.separation_max_ratio.max(row.max_ratio);
+            sink.separation(&row)?;
+        }
+        sink.smoothed(out)?;
+        self.epochs += 1;
+        if let Some(b) = bar {
+            if self.epochs % 8192 == 0 {
+                b.set_position(self.epochs);
+            }
+        }
+        Ok(())
+    }
+
     pub fn to_json(&self) -> serde_json::Value {
         serde_json::json!({
             "mode": self.mode,
@@ -487,25 +511,11 @@ impl ForwardLog {
             let s = smoother::error_at(e.nominal.nav.t, at, nxt.as_ref().map(|x| &x.0));
             let m = e.nominal.corrected(layout, &s);
             let out = output(self.week, &m, &at.var, base, e.integrity, layout);
-            if cadence.due(m.nav.t) {
-                let row = separation_row(
-                    &out.record,
-                    &s,
-                    |i| var_fwd[i] - at.var[i],
-                    self.spec.separation_sigma,
-                );
-                rep.separation_rows += 1;
-                rep.separation_flagged += u64::from(row.flagged);
-                rep.separation_max_ratio = rep.separation_max_ratio.max(row.max_ratio);
-                sink.separation(&row)?;
-            }
-            sink.smoothed(&out)?;
-            rep.epochs += 1;
-            if let Some(b) = &b {
-                if rep.epochs % 8192 == 0 {
-                    b.set_position(rep.epochs);
-                }
-            }
+            let row = cadence.due(m.nav.t).then(|| {
+                let k = self.spec.separation_sigma;
+                separation_row(&out.record, &s, |i| var_fwd[i] - at.var[i], k)
+            });
+            rep.emit(sink, &out, row, &b)?;
         }
         if let Some(b) = &b {
             b.finish_and_clear();
@@ -642,22 +652,16 @@ impl ForwardLog {
                 }
             };
             let out = output(self.week, &m, &var, base, e.integrity, layout);
-            if let Some((d, v)) = sep {
-                if cadence.due(t) {
-                    let row = separation_row(&out.record, &d, |i| v[i], self.spec.separation_sigma);
-                    rep.separation_rows += 1;
-                    rep.separation_flagged += u64::from(row.flagged);
-                    rep.separation_max_ratio = rep.separation_max_ratio.max(row.max_ratio);
-                    sink.separation(&row)?;
-                }
-            }
-            sink.smoothed(&out)?;
-            rep.epochs += 1;
-            if let Some(b) = &b {
-                if rep.epochs % 8192 == 0 {
-                    b.set_position(rep.epochs);
-                }
-            }
+            let row = match sep {
+                Some((d, v)) if cadence.due(t) => Some(separation_row(
+                    &out.record,
+                    &d,
+                    |i| v[i],
+                    self.spec.separation_sigma,
+                )),
+                _ => None,
+            };
+            rep.emit(sink, &out, row, &b)?;
         }
         if let Some(b) = &b {
             b.finish_and_clear();

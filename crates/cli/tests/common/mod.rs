@@ -106,3 +106,77 @@ pub fn errors_ned(sol: &Path, truth: &Path, t0: f64, t1: f64) -> Vec<(f64, Vecto
         .map(|(_, s)| (s.t, lla_diff_ned(&s.lla, &truth[&key(s.t)])))
         .collect()
 }
+
+/// `navfuse eval SOLUTION TRUTH --json EXTRA...`, parsed.
+pub fn eval_json(solution: &Path, truth: &Path, extra: &[&str]) -> serde_json::Value {
+    let mut args = vec![
+        "eval",
+        solution.to_str().unwrap(),
+        truth.to_str().unwrap(),
+        "--json",
+    ];
+    args.extend_from_slice(extra);
+    serde_json::from_str(&navfuse_ok(&args)).expect("eval --json output")
+}
+
+/// The number at `path` in `v` (panics naming the path when absent).
+pub fn num(v: &serde_json::Value, path: &[&str]) -> f64 {
+    let mut x = v;
+    for k in path {
+        x = &x[*k];
+    }
+    x.as_f64()
+        .unwrap_or_else(|| panic!("no number at {path:?} in {v}"))
+}
+
+/// A KF-GINS STD file: time [10 ms ticks] -> the 21 standard deviations (KF-GINS
+/// units: position N E D [m], velocity [m/s], attitude [deg], ...).
+pub fn read_std(path: &Path) -> HashMap<i64, Vec<f64>> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+        .map(|l| {
+            let v: Vec<f64> = l.split_whitespace().map(|x| x.parse().unwrap()).collect();
+            ((v[0] * 100.0).round() as i64, v[1..].to_vec())
+        })
+        .collect()
+}
+
+/// Per epoch after the first minute: (position, velocity, attitude) NEES of `sol`
+/// (a .nav file) with the 1-sigma of `std` against `truth` (a .nav file). The
+/// attitude error is the rotation from the true to the estimated attitude, in n.
+pub fn nees(truth: &Path, sol: &Path, std: &Path) -> Vec<[f64; 3]> {
+    let key = |t: f64| (t * 100.0).round() as i64;
+    let truth: HashMap<i64, navfuse_core::NavState> = read_nav(truth)
+        .unwrap()
+        .into_iter()
+        .map(|(_, s)| (key(s.t), s))
+        .collect();
+    let std = read_std(std);
+    let sol = read_nav(sol).unwrap();
+    let t0 = sol[0].1.t;
+    let norm2 = |e: Vector3<f64>, s: &[f64]| (0..3).map(|i| (e[i] / s[i]).powi(2)).sum::<f64>();
+    sol.iter()
+        .filter(|(_, s)| s.t - t0 >= 60.0)
+        .filter_map(|(_, s)| {
+            let (tr, sd) = (truth.get(&key(s.t))?, std.get(&key(s.t))?);
+            let e_att = (s.q_bn * tr.q_bn.inverse())
+                .scaled_axis()
+                .map(f64::to_degrees);
+            Some([
+                norm2(lla_diff_ned(&s.lla, &tr.lla), &sd[0..3]),
+                norm2(s.v_n - tr.v_n, &sd[3..6]),
+                norm2(e_att, &sd[6..9]),
+            ])
+        })
+        .collect()
+}
+
+/// Two-sided 95 % band of the N-run average NEES of 3 dof (Wilson-Hilferty).
+pub fn nees_band(n: usize) -> (f64, f64) {
+    let k = 3.0 * n as f64;
+    let a = 2.0 / (9.0 * k);
+    let q = |z: f64| k * (1.0 - a + z * a.sqrt()).powi(3) / n as f64;
+    (q(-1.959964), q(1.959964))
+}
