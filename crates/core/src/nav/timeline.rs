@@ -383,25 +383,30 @@ mod tests {
         assert!(rest.take_rest().is_none());
     }
 
+    fn fix(t: f64) -> crate::types::GnssFix {
+        crate::types::GnssFix {
+            t,
+            lla: Vector3::zeros(),
+            std_ned: Vector3::repeat(1.0),
+            vel_ned: None,
+            vel_std_ned: None,
+        }
+    }
+
+    fn odo(t: f64) -> crate::types::OdometerSample {
+        crate::types::OdometerSample {
+            t,
+            speed_mps: 1.0,
+            interval_s: 0.0,
+        }
+    }
+
     /// The inbox on its own: GNSS-clock inputs come due at t + offset, the odometer
     /// (IMU clock) at its own time; a fix inside an outage is withheld, an odometer
     /// record at the same time is not; nothing is handed over twice.
     #[test]
     fn inbox_applies_the_offset_and_withholds_outages() {
         use crate::outage::Window;
-        use crate::types::{GnssFix, OdometerSample};
-        let fix = |t: f64| GnssFix {
-            t,
-            lla: Vector3::zeros(),
-            std_ned: Vector3::repeat(1.0),
-            vel_ned: None,
-            vel_std_ned: None,
-        };
-        let odo = |t: f64| OdometerSample {
-            t,
-            speed_mps: 1.0,
-            interval_s: 0.0,
-        };
         let meas = crate::types::merge_measurements(
             &[fix(1.0), fix(2.0), fix(3.0)],
             &[odo(1.0), odo(2.0)],
@@ -503,19 +508,6 @@ mod tests {
     #[test]
     fn reverse_inbox_hands_over_from_the_end() {
         use crate::outage::Window;
-        use crate::types::{GnssFix, OdometerSample};
-        let fix = |t: f64| GnssFix {
-            t,
-            lla: Vector3::zeros(),
-            std_ned: Vector3::repeat(1.0),
-            vel_ned: None,
-            vel_std_ned: None,
-        };
-        let odo = |t: f64| OdometerSample {
-            t,
-            speed_mps: 1.0,
-            interval_s: 0.0,
-        };
         let meas = crate::types::merge_measurements(
             &[fix(1.0), fix(2.0), fix(3.0), fix(4.0)],
             &[odo(1.0), odo(2.0)],
