@@ -187,3 +187,22 @@ pub(crate) fn imu_window(cfg: &RunConfig, fix_lla: Option<Vector3<f64>>) -> Vec<
     let bias_bound = init.imu_errors.gyro_bias.norm() + 3.0 * init.imu_errors_std.gyro_bias.norm();
     plausibility::imu_magnitudes(&w, &units, gravity, bias_bound, static_start)
 }
+
+/// After smoothing: a separation report flagging many epochs means the filter's
+/// covariance does not cover its errors (a warning, the solutions are kept).
+pub(crate) fn after_smoothing(cfg: &RunConfig, rep: &crate::SmootherReport) -> Vec<Finding> {
+    let rows = rep.separation_rows.max(1) as f64;
+    let share = rep.separation_flagged as f64 / rows;
+    if rep.separation_rows >= 10 && share > 0.2 {
+        let k = cfg.smoother.separation_sigma;
+        vec![Finding::warning(format!(
+            "smoothing: {} of {} separation rows ({:.0} %) differ by more than {k} sigma (largest {:.0} sigma): the filter's covariance does not cover its errors (see separation.csv); check the other warnings, then the [imu_noise] values",
+            rep.separation_flagged,
+            rep.separation_rows,
+            100.0 * share,
+            rep.separation_max_ratio
+        ))]
+    } else {
+        Vec::new()
+    }
+}

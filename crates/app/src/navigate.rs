@@ -254,7 +254,9 @@ pub(crate) fn navigate(
             extra_sources: opts.extra_sources,
         };
         let rep = l.smooth(&layout, sink, opts.progress, job, &inputs)?;
+        let found = checks::after_smoothing(&cfg, &rep);
         job.smoother = Some(rep);
+        check(job, warn, found)?;
     }
     if opts.progress {
         for n in &job.notes {

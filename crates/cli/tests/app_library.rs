@@ -298,6 +298,12 @@ fn smoothed_records_equal_the_cli_files() {
         let s = summary(&cli);
         assert_eq!(s["smoother"]["epochs"], rep.epochs);
         assert_eq!(s["smoother"]["separation_flagged"], rep.separation_flagged);
+        // The demo's filter is overconfident (RESULTS §11): the separation says so.
+        let warned = s["warnings"].as_array().unwrap().iter().any(|w| {
+            w.as_str().unwrap().starts_with("smoothing:")
+                && w.as_str().unwrap().contains("separation.csv")
+        });
+        assert!(warned, "{mode}: no separation warning in {}", s["warnings"]);
         // The smoothed solution differs from the forward one (it did something).
         let moved = sink
             .smoothed

@@ -164,6 +164,12 @@ fn smoothed_nees_consistent_and_std_never_larger() {
         let out = dir.join("out");
         run_with(&toml, &out, &["--outages", "40/150@345720", "--smooth"]);
         let truth = dir.join("truth.nav");
+        // A consistent filter: the separation report raises no warning.
+        let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
+        assert!(
+            !summary.contains("smoothing:"),
+            "seed {seed}: a separation warning"
+        );
         for (acc, e) in [
             (
                 &mut sums,
