@@ -8,8 +8,10 @@
 //! (or, when the run stops cleanly, at the same epoch).
 
 use crate::error::{Error, ResultExt};
-use crate::sink::{OutputLayout, SmoothedEpoch, SmoothedLayout, SolutionSink};
+use crate::sink::{OutputLayout, SmoothedEpoch, SmoothedLayout, SolutionSink, StateValues};
 use crate::summary::JobResult;
+use navfuse_core::InnovationRow;
+use navfuse_io::innovations::InnovationWriter;
 use navfuse_io::nav::{
     CsvWriter, ImuErrWriter, NavWriter, RecordWriter, SolutionRecord, StdWriter,
 };
@@ -33,6 +35,12 @@ pub struct FileSink {
     smoothed_csv: Threaded,
     states: Option<StatesWriter>,
     separation: Option<SeparationWriter>,
+    /// states.csv (the forward run's extra states) and innovations.csv, created at
+    /// their first row.
+    forward_states: Option<StatesWriter>,
+    innovations: Option<InnovationWriter>,
+    /// Files created after `begin`, listed in the summary at the end.
+    late_files: Vec<PathBuf>,
 }
 
 /// Record writers on their own thread, fed in batches.
@@ -122,6 +130,9 @@ impl FileSink {
             smoothed_csv: Threaded::default(),
             states: None,
             separation: None,
+            forward_states: None,
+            innovations: None,
+            late_files: Vec::new(),
         })
     }
 
@@ -132,7 +143,10 @@ impl FileSink {
 }
 
 /// Files of an earlier run that this run may not write.
-const STALE: [&str; 19] = [
+const STALE: [&str; 22] = [
+    "states.csv",
+    "innovations.csv",
+    "report.html",
     "solution.pos",
     "solution.nmea",
     "solution.kml",
@@ -204,8 +218,39 @@ impl SolutionSink for FileSink {
         self.main.push(record)
     }
 
+    fn states(&mut self, s: &StateValues) -> Result<(), Error> {
+        if self.forward_states.is_none() {
+            let p = self.dir.join("states.csv");
+            self.forward_states = Some(StatesWriter::create(&p, s.names)?);
+            self.late_files.push(p);
+        }
+        if let Some(w) = self.forward_states.as_mut() {
+            w.write(s.gps_week, s.t, s.values, s.std)?;
+        }
+        Ok(())
+    }
+
+    fn innovations(&mut self, rows: &[InnovationRow]) -> Result<(), Error> {
+        if self.innovations.is_none() {
+            let p = self.dir.join("innovations.csv");
+            self.innovations = Some(InnovationWriter::create(&p)?);
+            self.late_files.push(p);
+        }
+        if let Some(w) = self.innovations.as_mut() {
+            for r in rows {
+                w.write(r)?;
+            }
+        }
+        Ok(())
+    }
+
     fn end(&mut self) -> Result<(), Error> {
-        self.main.end(&self.dir)
+        let main = self.main.end(&self.dir);
+        let states = self.forward_states.take().map_or(Ok(()), |w| w.finish());
+        let innovations = self.innovations.take().map_or(Ok(()), |w| w.finish());
+        main?;
+        states?;
+        Ok(innovations?)
     }
 
     fn begin_smoothed(
@@ -267,6 +312,7 @@ impl SolutionSink for FileSink {
     }
 
     fn report(&mut self, job: &mut JobResult, progress: bool) -> Result<(), Error> {
+        job.files.append(&mut self.late_files);
         write_reports(&self.dir, job, progress)
     }
 }

@@ -40,7 +40,9 @@ pub use file_sink::FileSink;
 pub use job::{run, run_job, run_job_opts, RunOptions};
 pub use navfuse_io::config::{self, RunConfig};
 pub use navfuse_io::nav::SolutionRecord;
-pub use sink::{MemorySink, OutputLayout, SmoothedEpoch, SmoothedLayout, SolutionSink};
+pub use sink::{
+    MemorySink, OutputLayout, SmoothedEpoch, SmoothedLayout, SolutionSink, StateValues,
+};
 pub use smooth::SmootherReport;
 pub use stop::{Interrupted, StopFlag};
 pub use summary::JobResult;

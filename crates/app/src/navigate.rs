@@ -6,12 +6,14 @@ use crate::checks::{self, check, AfterRun};
 use crate::error::{Error, ResultExt};
 use crate::inputs::{self, split_week};
 use crate::plausibility::{self, Span};
-use crate::sink::{OutputLayout, SolutionSink};
+use crate::sink::{OutputLayout, SolutionSink, StateValues};
 use crate::smooth::ForwardLog;
 use crate::stop::Interrupted;
 use crate::summary::JobResult;
 use crate::{time_offset, RunOptions};
 use indicatif::{ProgressBar, ProgressStyle};
+use navfuse_core::smoother::extra_names;
+use navfuse_core::state::N_INS;
 use navfuse_core::{Navigator, RunSummary};
 use navfuse_io::config::RunConfig;
 use navfuse_io::nav::SolutionRecord;
@@ -157,6 +159,12 @@ pub(crate) fn navigate(
         Some(l) => l.record(r),
         None => Ok(()),
     };
+    // The sink takes the innovations between output epochs; RefCell: the output
+    // closure hands it the epochs.
+    let sink = std::cell::RefCell::new(sink);
+    let mut on_innovations =
+        |rows: &[navfuse_core::InnovationRow]| sink.borrow_mut().innovations(rows);
+    let mut state_names: Option<Vec<String>> = None;
     let result = navfuse_core::run_recording(
         &cfg.nav,
         |c: &navfuse_core::config::NavConfig, t0| {
@@ -190,12 +198,30 @@ pub(crate) fn navigate(
                 imu_errors: *n.imu_errors(),
                 std: if want_std { Some(n.std21()) } else { None },
                 gnss_integrity: monitor_on.then(|| n.integrity_state().flag()),
+                state: Some(n.solution_state()),
             };
             last_out_t = Some(n.time_gnss());
             if let Some(l) = log.borrow_mut().as_mut() {
-                l.epoch(n, rec.gnss_integrity)?;
+                l.epoch(n, rec.gnss_integrity, rec.state)?;
             }
-            if let Err(e) = sink.epoch(&rec) {
+            let mut sink = sink.borrow_mut();
+            let mut written = sink.epoch(&rec);
+            let layout = n.layout();
+            if written.is_ok() && layout.len() > N_INS {
+                let names = state_names.get_or_insert_with(|| extra_names(layout));
+                let p = n.covariance();
+                let std: Vec<f64> = (N_INS..layout.len())
+                    .map(|i| p[(i, i)].max(0.0).sqrt())
+                    .collect();
+                written = sink.states(&StateValues {
+                    names,
+                    gps_week: wk,
+                    t,
+                    values: &n.nominal().extra_values(layout),
+                    std: &std,
+                });
+            }
+            if let Err(e) = written {
                 stopped = Some(n.summary().clone());
                 return Err(e);
             }
@@ -207,11 +233,15 @@ pub(crate) fn navigate(
                 b.set_message(format!("t = {t:.1}"));
             }
         },
-        match cfg.smoother.enabled {
-            true => Some(&mut on_record),
-            false => None,
+        navfuse_core::RunHooks {
+            on_record: match cfg.smoother.enabled {
+                true => Some(&mut on_record),
+                false => None,
+            },
+            on_innovations: Some(&mut on_innovations),
         },
     );
+    let sink = sink.into_inner();
     if let Some(b) = &bar {
         b.finish_and_clear();
     }

@@ -6,7 +6,7 @@
 
 use crate::error::Error;
 use crate::summary::JobResult;
-use navfuse_core::Event;
+use navfuse_core::{Event, InnovationRow};
 use navfuse_io::nav::SolutionRecord;
 use navfuse_io::smoothed::SeparationRow;
 use std::path::PathBuf;
@@ -49,9 +49,24 @@ pub struct SmoothedEpoch {
     pub states_std: Vec<f64>,
 }
 
+/// The filter states beyond the 21 INS ones at one forward output epoch (the
+/// columns of `states.csv`).
+#[derive(Clone, Copy, Debug)]
+pub struct StateValues<'a> {
+    /// State names with units (`navfuse_core::smoother::extra_names`).
+    pub names: &'a [String],
+    pub gps_week: u32,
+    /// GPS seconds of week.
+    pub t: f64,
+    pub values: &'a [f64],
+    pub std: &'a [f64],
+}
+
 /// Receives a run's output. Calls, in order: [`begin`](Self::begin) once the inputs
 /// are read and checked (not at all when the run is refused before), then
-/// [`epoch`](Self::epoch) per output epoch, [`end`](Self::end) after the last one
+/// [`epoch`](Self::epoch) per output epoch (each followed by [`states`](Self::states)
+/// when the filter has extra states; [`innovations`](Self::innovations) in between),
+/// [`end`](Self::end) after the last one
 /// (also when the run stopped early); when smoothing, after a completed forward run,
 /// [`begin_smoothed`](Self::begin_smoothed), [`smoothed`](Self::smoothed) per
 /// output epoch with [`separation`](Self::separation) rows in between, and
@@ -64,6 +79,19 @@ pub trait SolutionSink {
 
     /// One output epoch. An error stops the run (the records so far are kept).
     fn epoch(&mut self, record: &SolutionRecord) -> Result<(), Error>;
+
+    /// The extra filter states at the output epoch just handed to
+    /// [`epoch`](Self::epoch) (only when the filter has states beyond the INS ones).
+    fn states(&mut self, states: &StateValues) -> Result<(), Error> {
+        let _ = states;
+        Ok(())
+    }
+
+    /// Updates the aiding sources tried since the previous call, in time order.
+    fn innovations(&mut self, rows: &[InnovationRow]) -> Result<(), Error> {
+        let _ = rows;
+        Ok(())
+    }
 
     /// Where the output is kept, for messages: "its output is kept in LOCATION".
     fn location(&self) -> String {

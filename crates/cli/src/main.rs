@@ -41,8 +41,10 @@ enum Command {
     /// Run the navigator on a configuration (navfuse TOML, or a KF-GINS YAML with --kf-gins).
     ///
     /// Writes DIR/solution.nav (KF-GINS 11 columns), and as configured DIR/imu_err.txt,
-    /// DIR/std.txt, DIR/solution.csv; DIR/events.log lists rejected GNSS fixes and input
-    /// findings; DIR/summary.json holds the run's counts and the estimated GNSS-IMU time
+    /// DIR/std.txt, DIR/solution.csv (with the solution state per epoch: gnss, static,
+    /// dead_reckoning, inertial, gnss_excluded); DIR/states.csv (the extra filter states),
+    /// DIR/innovations.csv (every update tried, its NIS and gate); DIR/events.log lists
+    /// rejected GNSS fixes and input findings; DIR/summary.json holds the run's counts and the estimated GNSS-IMU time
     /// offset. When the configuration estimates the time offset, the data are read twice:
     /// the first pass finds the offset, the second navigates with it and writes the
     /// solution on the GNSS time scale. A progress bar is drawn on stderr when it is a
@@ -93,7 +95,8 @@ enum Command {
     /// Write exports of a finished run: RUN_DIR/solution.nav (with --smoothed,
     /// smoothed.nav) as RTKLIB .pos, NMEA, KML, GeoJSON or GPX beside it
     /// (docs/FORMATS.md "Exports"); the .pos standard deviations come from std.txt
-    /// when it is there.
+    /// and the NMEA quality (GNSS or dead reckoning) from solution.csv when they are
+    /// there.
     Export {
         /// The output directory of `navfuse run`.
         run_dir: PathBuf,

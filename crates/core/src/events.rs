@@ -145,6 +145,86 @@ impl std::fmt::Display for Event {
     }
 }
 
+/// What aided the solution at an output epoch (`solution.csv` column `state`), in
+/// this order of precedence: GNSS excluded by the integrity monitor, static (ZUPT),
+/// GNSS fused recently, vehicle constraints (odometer, NHC) fused recently, free
+/// inertial.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum SolutionState {
+    /// A GNSS fix or pseudorange was fused within the last GNSS intervals.
+    Gnss,
+    /// The static detector sees the vehicle at rest (zero-velocity updates).
+    Static,
+    /// No GNSS lately; odometer or NHC updates bound the drift.
+    DeadReckoning,
+    /// No GNSS and no vehicle constraint lately: the INS alone (coasting).
+    Inertial,
+    /// The integrity monitor holds GNSS out (spoofed, or recovering).
+    GnssExcluded,
+}
+
+impl SolutionState {
+    pub const ALL: [SolutionState; 5] = [
+        SolutionState::Gnss,
+        SolutionState::Static,
+        SolutionState::DeadReckoning,
+        SolutionState::Inertial,
+        SolutionState::GnssExcluded,
+    ];
+
+    /// The name written in solution.csv.
+    pub fn name(self) -> &'static str {
+        match self {
+            SolutionState::Gnss => "gnss",
+            SolutionState::Static => "static",
+            SolutionState::DeadReckoning => "dead_reckoning",
+            SolutionState::Inertial => "inertial",
+            SolutionState::GnssExcluded => "gnss_excluded",
+        }
+    }
+
+    pub fn from_name(s: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|v| v.name() == s)
+    }
+}
+
+/// One update tried by an aiding source (`innovations.csv`): what the gate saw.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct InnovationRow {
+    /// GNSS time scale \[s\].
+    pub t: f64,
+    /// The measurement's name (`Aiding::name`, or a custom source's).
+    pub source: &'static str,
+    /// Number of rows stacked.
+    pub rows: usize,
+    /// The first three innovations h(x) - z, in the measurement's units (NaN past
+    /// `rows`).
+    pub innovation: [f64; 3],
+    /// Normalised innovation squared y^T S^-1 y (NaN when S was singular).
+    pub nis: f64,
+    /// The chi-square gate on the NIS, when gated.
+    pub gate: Option<f64>,
+    pub outcome: UpdateKind,
+}
+
+/// How an update ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum UpdateKind {
+    Applied,
+    Rejected,
+    Singular,
+}
+
+impl UpdateKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            UpdateKind::Applied => "applied",
+            UpdateKind::Rejected => "rejected",
+            UpdateKind::Singular => "singular",
+        }
+    }
+}
+
 /// Counts for the end-of-run summary.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct RunSummary {

@@ -31,11 +31,11 @@ pub mod time;
 pub mod types;
 
 pub use aiding::source::{AidingSource, Fuser, Handled};
-pub use events::{AidStatus, Event, RunSummary};
+pub use events::{AidStatus, Event, InnovationRow, RunSummary, SolutionState, UpdateKind};
 pub use nav::backward::{run_backward, BackwardStart};
 pub use nav::ins_filter::{BlockProcess, BlockSpec, Fused};
 pub use nav::navigator::{NavError, Navigator};
-pub use nav::run::{run, run_recording, run_with_sources, SourceFactory};
+pub use nav::run::{run, run_recording, run_with_sources, RunHooks, SourceFactory};
 pub use nav::timeline;
 pub use nav::timeline::TimeDirection;
 pub use types::{

@@ -13,6 +13,7 @@ use crate::nav::{Out, RecordWriter, SolutionRecord};
 use crate::time::week_sow_to_calendar;
 use navfuse_core::attitude::{euler_from_q_bn, wrap_2pi};
 use navfuse_core::time::leap_seconds;
+use navfuse_core::SolutionState;
 use std::io::Write as _;
 use std::path::Path;
 
@@ -270,7 +271,16 @@ impl RecordWriter for NmeaWriter {
         let n = &r.nav;
         let (lat, ns) = nmea_angle(n.lla.x.to_degrees(), false);
         let (lon, ew) = nmea_angle(n.lla.y.to_degrees(), true);
-        let q = if matches!(r.gnss_integrity, Some(2)) {
+        // 6 = estimated (dead reckoning): GNSS held out or not fused lately.
+        let coasting = matches!(
+            r.state,
+            Some(
+                SolutionState::DeadReckoning
+                    | SolutionState::Inertial
+                    | SolutionState::GnssExcluded
+            )
+        );
+        let q = if coasting || matches!(r.gnss_integrity, Some(2)) {
             6
         } else {
             1

@@ -10,6 +10,7 @@ pub mod fmt;
 pub mod gnss;
 pub mod heading;
 pub mod imu;
+pub mod innovations;
 pub mod input;
 pub mod nav;
 pub mod nav_written;

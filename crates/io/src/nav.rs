@@ -11,7 +11,7 @@ use crate::fmt::{
 use nalgebra::Vector3;
 use navfuse_core::attitude::{euler_from_q_bn, q_bn_from_euler, wrap_2pi};
 use navfuse_core::time::SECONDS_PER_WEEK;
-use navfuse_core::{ImuErrors, NavState};
+use navfuse_core::{ImuErrors, NavState, SolutionState};
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -40,6 +40,8 @@ pub struct SolutionRecord {
     /// GNSS integrity flag (navfuse_core::integrity::IntegrityState::flag: 0 trusted,
     /// 1 suspect, 2 spoofed, 3 recovering) when the monitor runs.
     pub gnss_integrity: Option<u8>,
+    /// What aided the solution at this epoch (navfuse_core::SolutionState), when known.
+    pub state: Option<SolutionState>,
 }
 
 /// The 11 `.nav` values: week, t, lat \[deg\], lon \[deg\], h \[m\], vN vE vD [m/s],
@@ -325,7 +327,8 @@ std_sax_ppm,std_say_ppm,std_saz_ppm";
 
 /// `solution.csv`: a header row, then per record the week (integer) and the `.nav`
 /// values with 9 decimals; with `with_std`, the 21 std columns follow (empty fields
-/// for a record without std).
+/// for a record without std); last the solution state (`gnss`, `static`,
+/// `dead_reckoning`, `inertial`, `gnss_excluded`; empty when unknown).
 pub struct CsvWriter {
     out: Out,
     with_std: bool,
@@ -345,6 +348,7 @@ impl CsvWriter {
         if with_integrity {
             out.line.extend_from_slice(b",gnss_integrity");
         }
+        out.line.extend_from_slice(b",state");
         out.line.push(b'\n');
         out.put()?;
         Ok(CsvWriter {
@@ -378,6 +382,10 @@ impl CsvWriter {
             if let Some(f) = r.gnss_integrity {
                 line.extend_from_slice(f.to_string().as_bytes());
             }
+        }
+        line.push(b',');
+        if let Some(s) = r.state {
+            line.extend_from_slice(s.name().as_bytes());
         }
         line.push(b'\n');
         self.out.put()
@@ -505,6 +513,7 @@ mod tests {
             },
             std: Some([0.01; 21]),
             gnss_integrity: None,
+            state: None,
         }
     }
 

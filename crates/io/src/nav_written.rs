@@ -63,6 +63,7 @@ mod tests {
             imu_errors: ImuErrors::default(),
             std: None,
             gnss_integrity: None,
+            state: None,
         }
     }
 

@@ -291,6 +291,7 @@ fn truth_nav_and_kfgins_output_round_trip() {
             imu_errors: ImuErrors::default(),
             std: None,
             gnss_integrity: None,
+            state: None,
         })
         .unwrap();
     }
@@ -395,6 +396,7 @@ fn speed_write_kfgins_outputs() {
                 },
                 std: Some([1e-3 + 1e-9 * x; 21]),
                 gnss_integrity: None,
+                state: None,
             };
             nav.write(&r).unwrap();
             err.write(&r).unwrap();
@@ -466,6 +468,7 @@ fn speed_write_kfgins_outputs() {
             imu_errors: ImuErrors::default(),
             std: Some([0.01; 21]),
             gnss_integrity: None,
+            state: None,
         })
         .unwrap();
     }

@@ -321,6 +321,7 @@ pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError>
             imu_errors: *e,
             std: None,
             gnss_integrity: None,
+            state: None,
         };
         tw.write(&rec)?;
         kw.write_record(&rec)?;

@@ -19,7 +19,7 @@ use navfuse_core::smoother::{self, extra_names, Nominal, RtsBackward, RtsRecord}
 use navfuse_core::state::{StateLayout, ATT, N_INS};
 use navfuse_core::time::split_week;
 use navfuse_core::BackwardStart;
-use navfuse_core::{ImuSample, Navigator};
+use navfuse_core::{ImuSample, Navigator, SolutionState};
 use navfuse_io::input::{SmootherMode, SmootherSpec};
 use navfuse_io::nav::SolutionRecord;
 use navfuse_io::smoothed::SeparationRow;
@@ -237,7 +237,12 @@ impl ForwardLog {
 
     /// Keep an output epoch: its nominal state, the record it belongs to, its GNSS
     /// integrity flag; in mode "combined" also its variances.
-    pub fn epoch(&mut self, n: &Navigator, integrity: Option<u8>) -> Result<(), Error> {
+    pub fn epoch(
+        &mut self,
+        n: &Navigator,
+        integrity: Option<u8>,
+        state: Option<SolutionState>,
+    ) -> Result<(), Error> {
         if self.layout.is_none() {
             let l = n.layout().clone();
             self.source_idx = smoother::nominal::source_ranges(&l).flatten().collect();
@@ -247,6 +252,12 @@ impl ForwardLog {
         e.clear();
         e.u(n.smoother_record_index().unwrap_or(0));
         e.u(integrity.map_or(255, u64::from));
+        e.u(state.map_or(255, |s| {
+            SolutionState::ALL
+                .iter()
+                .position(|a| *a == s)
+                .unwrap_or(255) as u64
+        }));
         codec::put_nominal(e, &n.nominal(), &self.source_idx);
         if self.spec.mode == SmootherMode::Combined {
             let p = n.covariance();
@@ -259,6 +270,7 @@ impl ForwardLog {
 struct Epoch {
     record: u64,
     integrity: Option<u8>,
+    state: Option<SolutionState>,
     nominal: Nominal,
     var: Option<DVector<f64>>,
 }
@@ -267,11 +279,13 @@ fn get_epoch(b: &[u8], n: usize, source_idx: &[usize], with_var: bool) -> std::i
     let mut d = Dec::new(b);
     let record = d.u()?;
     let flag = d.u()?;
+    let state = SolutionState::ALL.get(d.u()? as usize).copied();
     let nominal = codec::get_nominal(&mut d, n, source_idx)?;
     let var = if with_var { Some(d.vec(n)?) } else { None };
     Ok(Epoch {
         record,
         integrity: (flag != 255).then_some(flag as u8),
+        state,
         nominal,
         var,
     })
@@ -296,6 +310,7 @@ fn output(
     var: &DVector<f64>,
     base: &OutputLayout,
     integrity: Option<u8>,
+    state: Option<SolutionState>,
     layout: &StateLayout,
 ) -> SmoothedEpoch {
     let (wk, t) = split_week(week, m.nav.t - m.time_offset_s);
@@ -310,6 +325,7 @@ fn output(
             imu_errors: m.imu_errors,
             std: base.std.then_some(std),
             gnss_integrity: integrity,
+            state,
         },
         states: m.extra_values(layout),
         states_std: (N_INS..layout.len())
@@ -510,7 +526,7 @@ impl ForwardLog {
             };
             let s = smoother::error_at(e.nominal.nav.t, at, nxt.as_ref().map(|x| &x.0));
             let m = e.nominal.corrected(layout, &s);
-            let out = output(self.week, &m, &at.var, base, e.integrity, layout);
+            let out = output(self.week, &m, &at.var, base, e.integrity, e.state, layout);
             let row = cadence.due(m.nav.t).then(|| {
                 let k = self.spec.separation_sigma;
                 separation_row(&out.record, &s, |i| var_fwd[i] - at.var[i], k)
@@ -651,7 +667,7 @@ impl ForwardLog {
                     (e.nominal.clone(), var_f, None)
                 }
             };
-            let out = output(self.week, &m, &var, base, e.integrity, layout);
+            let out = output(self.week, &m, &var, base, e.integrity, e.state, layout);
             let row = match sep {
                 Some((d, v)) if cadence.due(t) => Some(separation_row(
                     &out.record,

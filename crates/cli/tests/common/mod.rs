@@ -50,6 +50,18 @@ pub fn navfuse_ok(args: &[&str]) -> String {
     String::from_utf8_lossy(&out.stdout).into_owned()
 }
 
+/// `navfuse run examples/demo/drive_excerpt.toml --out DIR/run -q EXTRA...` in a
+/// fresh scratch directory `tmp(name)`; returns (scratch directory, run directory).
+pub fn run_demo(name: &str, extra: &[&str]) -> (PathBuf, PathBuf) {
+    let dir = tmp(name);
+    let out = dir.join("run");
+    let o = out.to_str().unwrap().to_string();
+    let mut args = vec!["run", "examples/demo/drive_excerpt.toml", "--out", &o, "-q"];
+    args.extend_from_slice(extra);
+    navfuse_ok(&args);
+    (dir, out)
+}
+
 /// `navfuse sim SCENARIO --out OUT -q` (scenario relative to the repository root or
 /// absolute).
 pub fn simulate(scenario: &Path, out: &Path) {

@@ -248,6 +248,7 @@ impl GnssLoose {
         let trusted = used && weight >= 0.1;
         if used {
             f.record().gnss_used += 1;
+            f.shared().note_gnss_fused(fix.t);
         }
         if trusted {
             self.fix_streak = None;

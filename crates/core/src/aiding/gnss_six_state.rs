@@ -158,6 +158,9 @@ impl GnssSixState {
         };
         let outcome = six.update(&imu_fix, gate);
         f.six_state_refresh();
+        if matches!(outcome, SixStateOutcome::Applied { .. }) {
+            f.shared().note_gnss_fused(fix.t);
+        }
         const SOURCE: &str = "gnss_six_state";
         let rec = f.record();
         match outcome {

@@ -9,7 +9,7 @@
 //! `registry.rs` lists the sources.
 
 use crate::aiding::{Aiding, AidingContext, Linearized, ReceiverClock, VehicleEstimate};
-use crate::events::{AidStatus, Event, RunSummary};
+use crate::events::{AidStatus, Event, InnovationRow, RunSummary, UpdateKind};
 use crate::filter::UpdateOutcome;
 use crate::integrity::IntegrityState;
 use crate::nav::ins_filter::{BlockProcess, BlockSpec, Fused, InsFilter};
@@ -35,6 +35,26 @@ pub struct Shared {
     pub last_gnss_used_t: f64,
     /// The static detector sees the vehicle at rest (ZUPT): no NHC meanwhile.
     pub is_static: bool,
+    /// Time of the last GNSS epoch fused (any weight; GNSS time) \[s\], and the
+    /// latest interval between two such epochs under 30 s \[s\]: the solution
+    /// state (`Navigator::solution_state`).
+    pub gnss_fused_t: Option<f64>,
+    pub gnss_interval_s: Option<f64>,
+    /// Time of the last odometer or NHC update applied (GNSS time) \[s\].
+    pub vehicle_fused_t: Option<f64>,
+}
+
+impl Shared {
+    /// A GNSS epoch was fused at `t`.
+    pub fn note_gnss_fused(&mut self, t: f64) {
+        if let Some(prev) = self.gnss_fused_t {
+            let dt = (t - prev).abs();
+            if dt > 1e-3 && dt < 30.0 {
+                self.gnss_interval_s = Some(dt);
+            }
+        }
+        self.gnss_fused_t = Some(t);
+    }
 }
 
 /// One aiding source: model, policy and state (see the module doc).
@@ -251,7 +271,11 @@ impl Fuser<'_> {
         nis_stat: Option<f64>,
     ) -> Fused {
         let logged = aiding.logs_rejections();
-        self.fuse_named(aiding.name(), logged, lin, gate, nis_stat)
+        let out = self.fuse_named(aiding.name(), logged, lin, gate, nis_stat);
+        if out.applied() && matches!(aiding, Aiding::Nhc(_) | Aiding::Odometer { .. }) {
+            self.shared.vehicle_fused_t = Some(self.time_gnss());
+        }
+        out
     }
 
     /// Fuse rows of a source's own model under `name` (a custom source's entry
@@ -279,7 +303,30 @@ impl Fuser<'_> {
         let st = &mut *self.status;
         st.innovation.clear();
         st.innovation.extend(lin.y.iter());
-        match self.ins.update(lin, gate) {
+        let outcome = self.ins.update(lin, gate);
+        if let Some(log) = self.ins.innovations.as_mut() {
+            let mut innovation = [f64::NAN; 3];
+            for (v, y) in innovation.iter_mut().zip(lin.y.iter()) {
+                *v = *y;
+            }
+            let (nis, kind) = match &outcome {
+                UpdateOutcome::Applied { nis, .. } => {
+                    (nis_stat.unwrap_or(*nis), UpdateKind::Applied)
+                }
+                UpdateOutcome::Rejected { nis, .. } => (*nis, UpdateKind::Rejected),
+                UpdateOutcome::Singular => (f64::NAN, UpdateKind::Singular),
+            };
+            log.push(InnovationRow {
+                t,
+                source: name,
+                rows: lin.y.len(),
+                innovation,
+                nis,
+                gate,
+                outcome: kind,
+            });
+        }
+        match outcome {
             UpdateOutcome::Applied { dx, nis } => {
                 let nis = nis_stat.unwrap_or(nis);
                 let e = self.record.aiding_nis.entry(name).or_default();

@@ -211,6 +211,7 @@ impl TightGnss {
         if used {
             f.record().gnss_used += 1;
             f.shared().last_gnss_used_t = epoch.t;
+            f.shared().note_gnss_fused(epoch.t);
         } else {
             f.record().gnss_rejected += 1;
         }

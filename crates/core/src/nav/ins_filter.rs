@@ -12,6 +12,7 @@ use crate::attitude::{c_bn_from_euler, q_bn_from_euler};
 use crate::config::{NavConfig, NhcMode};
 use crate::earth::lla_to_ecef;
 use crate::error_model::{fill_f, fill_qc, Discretizer, MeanMotion};
+use crate::events::InnovationRow;
 use crate::filter::{Eskf, UpdateOutcome};
 use crate::mechanization::Mechanizer;
 use crate::nav::timeline::TimeDirection;
@@ -100,6 +101,9 @@ pub struct InsFilter {
     pub(crate) six_state_out: NavState,
     /// What the RTS smoother needs, when the run records for it (smoother/record.rs).
     pub(crate) recorder: Option<Recorder>,
+    /// Every update tried since the last drain, when the run logs them
+    /// (`innovations.csv`).
+    pub(crate) innovations: Option<Vec<InnovationRow>>,
     /// Which way the run goes in time (nav/backward.rs: backward, the IMU pieces
     /// come time-reversed, dt < 0).
     pub(crate) direction: TimeDirection,
@@ -252,6 +256,7 @@ impl InsFilter {
             displacement: track_displacement.then(|| (Vector3::zeros(), lla_to_ecef(&lla))),
             corrections: 0,
             recorder: None,
+            innovations: None,
             direction: TimeDirection::Forward,
         }
     }

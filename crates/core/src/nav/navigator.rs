@@ -15,7 +15,7 @@ use crate::aiding::source::{AidingSource, Fuser, Shared};
 use crate::aiding::VehicleEstimate;
 use crate::attitude::{euler_from_c_bn, euler_from_q_bn};
 use crate::config::NavConfig;
-use crate::events::{AidStatus, Event, RunSummary};
+use crate::events::{AidStatus, Event, InnovationRow, RunSummary, SolutionState};
 use crate::integrity::IntegrityState;
 use crate::smoother::{Nominal, RtsRecord};
 use crate::state::{Block, StateLayout, ATT, N_INS, POS, VEL};
@@ -97,6 +97,9 @@ impl Navigator {
             shared: Shared {
                 last_gnss_used_t: t0,
                 is_static: false,
+                gnss_fused_t: None,
+                gnss_interval_s: None,
+                vehicle_fused_t: None,
             },
             summary: RunSummary {
                 first_t: t0,
@@ -206,6 +209,46 @@ impl Navigator {
             .iter()
             .find_map(|s| s.integrity_state())
             .unwrap_or(IntegrityState::Trusted)
+    }
+
+    /// What aided the solution lately ([`SolutionState`]): GNSS counts when a GNSS
+    /// epoch was fused within 1.5 of its intervals + 0.5 s (1 s until two are
+    /// seen), odometer / NHC within 1 s.
+    pub fn solution_state(&self) -> SolutionState {
+        if matches!(
+            self.integrity_state(),
+            IntegrityState::Spoofed | IntegrityState::Recovering
+        ) {
+            return SolutionState::GnssExcluded;
+        }
+        if self.shared.is_static {
+            return SolutionState::Static;
+        }
+        let now = self.time_gnss();
+        let recent = |t: Option<f64>, window: f64| t.is_some_and(|t| (now - t).abs() <= window);
+        let gnss_window = 1.5 * self.shared.gnss_interval_s.unwrap_or(1.0) + 0.5;
+        if recent(self.shared.gnss_fused_t, gnss_window) {
+            SolutionState::Gnss
+        } else if recent(self.shared.vehicle_fused_t, 1.0) {
+            SolutionState::DeadReckoning
+        } else {
+            SolutionState::Inertial
+        }
+    }
+
+    /// Log every update tried from now on ([`InnovationRow`]), taken with
+    /// [`Navigator::take_innovations`].
+    pub fn log_innovations(&mut self) {
+        self.ins.innovations = Some(Vec::new());
+    }
+
+    /// The updates tried since the last call (empty when not logging).
+    pub fn take_innovations(&mut self) -> Vec<InnovationRow> {
+        self.ins
+            .innovations
+            .as_mut()
+            .map(std::mem::take)
+            .unwrap_or_default()
     }
 
     /// True while position, velocity and attitude are finite numbers.

@@ -7,7 +7,7 @@ use super::timeline::{effective_time, Inbox};
 use crate::aiding::registry;
 use crate::aiding::source::AidingSource;
 use crate::config::{GnssFusion, NavConfig};
-use crate::events::{Event, RunSummary};
+use crate::events::{Event, InnovationRow, RunSummary};
 use crate::smoother::RtsRecord;
 use crate::types::{ImuSample, Measurement};
 
@@ -64,14 +64,30 @@ pub fn run_with_sources<E: From<NavError>>(
         output_period_s,
         on_output,
         on_progress,
-        None,
+        RunHooks::default(),
     )
 }
 
-/// [`run_with_sources`] recording for the RTS smoother (crate::smoother) when
-/// `on_record` is given: every record is handed to it as it closes, the last one
-/// after the last IMU sample; output epochs know their record by
-/// [`Navigator::smoother_record_index`].
+/// What [`run_recording`] hands out besides the output epochs.
+pub struct RunHooks<'a, E> {
+    /// Record for the RTS smoother (crate::smoother): every record is handed out as
+    /// it closes, the last one after the last IMU sample; output epochs know their
+    /// record by [`Navigator::smoother_record_index`].
+    pub on_record: Option<&'a mut dyn FnMut(RtsRecord) -> Result<(), E>>,
+    /// Every update tried ([`InnovationRow`]), after each IMU step.
+    pub on_innovations: Option<&'a mut dyn FnMut(&[InnovationRow]) -> Result<(), E>>,
+}
+
+impl<E> Default for RunHooks<'_, E> {
+    fn default() -> Self {
+        RunHooks {
+            on_record: None,
+            on_innovations: None,
+        }
+    }
+}
+
+/// [`run_with_sources`] with [`RunHooks`]: smoother records and the innovations.
 #[allow(clippy::too_many_arguments)]
 pub fn run_recording<E: From<NavError>>(
     cfg: &NavConfig,
@@ -81,9 +97,9 @@ pub fn run_recording<E: From<NavError>>(
     output_period_s: Option<f64>,
     on_output: impl FnMut(&Navigator) -> Result<(), E>,
     on_progress: impl FnMut(f64),
-    on_record: Option<&mut dyn FnMut(RtsRecord) -> Result<(), E>>,
+    hooks: RunHooks<'_, E>,
 ) -> Result<RunSummary, E> {
-    if on_record.is_some() && matches!(cfg.gnss.fusion, GnssFusion::SixState { .. }) {
+    if hooks.on_record.is_some() && matches!(cfg.gnss.fusion, GnssFusion::SixState { .. }) {
         return Err(NavError(
             "smoothing works on the error-state filter; gnss fusion \"six_state\" cannot be smoothed (use the default fusion)".into(),
         )
@@ -97,7 +113,7 @@ pub fn run_recording<E: From<NavError>>(
         output_period_s,
         on_output,
         on_progress,
-        on_record,
+        hooks,
     )
 }
 
@@ -110,8 +126,12 @@ fn drive<E: From<NavError>>(
     output_period_s: Option<f64>,
     mut on_output: impl FnMut(&Navigator) -> Result<(), E>,
     mut on_progress: impl FnMut(f64),
-    mut on_record: Option<&mut dyn FnMut(RtsRecord) -> Result<(), E>>,
+    hooks: RunHooks<'_, E>,
 ) -> Result<RunSummary, E> {
+    let RunHooks {
+        mut on_record,
+        mut on_innovations,
+    } = hooks;
     if matches!(cfg.gnss.fusion, GnssFusion::SixState { .. }) && cfg.tight.enabled {
         return Err(NavError(
             "gnss fusion \"six_state\" fuses GNSS fixes (loose coupling) only; it cannot be used with tight coupling".into(),
@@ -132,6 +152,9 @@ fn drive<E: From<NavError>>(
     let mut n = Navigator::with_sources(cfg, start.t0, start.lla, start.rpy, start.v_n, sources);
     if on_record.is_some() {
         n.record_for_smoothing();
+    }
+    if on_innovations.is_some() {
+        n.log_innovations();
     }
     if matches!(cfg.gnss.fusion, GnssFusion::SixState { .. }) && !n.has_six_state() {
         return Err(NavError(format!(
@@ -170,6 +193,12 @@ fn drive<E: From<NavError>>(
         if let Some(f) = on_record.as_mut() {
             for r in n.take_smoother_records() {
                 f(r)?;
+            }
+        }
+        if let Some(f) = on_innovations.as_mut() {
+            let rows = n.take_innovations();
+            if !rows.is_empty() {
+                f(&rows)?;
             }
         }
         // Cadence on the time scale the records carry (GNSS time).
