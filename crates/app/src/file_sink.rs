@@ -11,6 +11,7 @@ use crate::error::{Error, ResultExt};
 use crate::sink::{OutputLayout, SmoothedEpoch, SmoothedLayout, SolutionSink, StateValues};
 use crate::summary::JobResult;
 use navfuse_core::InnovationRow;
+use navfuse_io::config::RunConfig;
 use navfuse_io::innovations::InnovationWriter;
 use navfuse_io::nav::{
     CsvWriter, ImuErrWriter, NavWriter, RecordWriter, SolutionRecord, StdWriter,
@@ -143,7 +144,8 @@ impl FileSink {
 }
 
 /// Files of an earlier run that this run may not write.
-const STALE: [&str; 22] = [
+const STALE: [&str; 23] = [
+    "config.toml",
     "states.csv",
     "innovations.csv",
     "report.html",
@@ -205,6 +207,16 @@ fn record_writers(
 }
 
 impl SolutionSink for FileSink {
+    /// `config.toml`: every key of the configuration the run used (paths absolute),
+    /// so that `navfuse run DIR/config.toml` repeats it and the report shows it.
+    fn configuration(&mut self, cfg: &RunConfig, files: &mut Vec<PathBuf>) -> Result<(), Error> {
+        let p = self.dir.join("config.toml");
+        std::fs::write(&p, cfg.to_toml_string())
+            .map_err(|e| Error::io(format!("cannot write {}", p.display()), e))?;
+        files.push(p);
+        Ok(())
+    }
+
     fn begin(&mut self, layout: &OutputLayout, files: &mut Vec<PathBuf>) -> Result<(), Error> {
         self.main = Threaded::start(record_writers(&self.dir, "solution", layout, files)?);
         Ok(())

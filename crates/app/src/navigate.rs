@@ -127,6 +127,7 @@ pub(crate) fn navigate(
         exports: navfuse_io::export::ExportSet::of(&cfg.output.formats),
     };
     job.integrity_table = monitor_on;
+    sink.configuration(&cfg, &mut job.files)?;
     sink.begin(&layout, &mut job.files)?;
     // The smoother's scratch files: beside the output (a temporary directory may be
     // in memory).

@@ -7,6 +7,7 @@
 use crate::error::Error;
 use crate::summary::JobResult;
 use navfuse_core::{Event, InnovationRow};
+use navfuse_io::config::RunConfig;
 use navfuse_io::nav::SolutionRecord;
 use navfuse_io::smoothed::SeparationRow;
 use std::path::PathBuf;
@@ -73,6 +74,13 @@ pub struct StateValues<'a> {
 /// [`end_smoothed`](Self::end_smoothed); and [`report`](Self::report) once the run
 /// has ended, however it ended (also after a failure before `begin`).
 pub trait SolutionSink {
+    /// The configuration the run uses (relative outages resolved), before
+    /// [`begin`](Self::begin); push the path of a file it is written to onto `files`.
+    fn configuration(&mut self, cfg: &RunConfig, files: &mut Vec<PathBuf>) -> Result<(), Error> {
+        let _ = (cfg, files);
+        Ok(())
+    }
+
     /// Get ready for records laid out as `layout`; push the paths of the files this
     /// sink will write onto `files` (they appear in the summary).
     fn begin(&mut self, layout: &OutputLayout, files: &mut Vec<PathBuf>) -> Result<(), Error>;

@@ -43,7 +43,9 @@ enum Command {
     /// Writes DIR/solution.nav (KF-GINS 11 columns), and as configured DIR/imu_err.txt,
     /// DIR/std.txt, DIR/solution.csv (with the solution state per epoch: gnss, static,
     /// dead_reckoning, inertial, gnss_excluded); DIR/states.csv (the extra filter states),
-    /// DIR/innovations.csv (every update tried, its NIS and gate); DIR/events.log lists
+    /// DIR/innovations.csv (every update tried, its NIS and gate); DIR/config.toml (the
+    /// configuration used, every key: `navfuse run DIR/config.toml` repeats the run);
+    /// DIR/events.log lists
     /// rejected GNSS fixes and input findings; DIR/summary.json holds the run's counts and the estimated GNSS-IMU time
     /// offset. When the configuration estimates the time offset, the data are read twice:
     /// the first pass finds the offset, the second navigates with it and writes the

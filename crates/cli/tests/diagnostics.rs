@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::run_demo;
+use common::{navfuse_ok, run_demo};
 
 /// The `state` column of a CSV, with its time column.
 fn states(path: &std::path::Path) -> Vec<(f64, String)> {
@@ -112,6 +112,22 @@ fn state_column_innovations_and_states_on_the_demo() {
         assert!(
             files.iter().any(|p| p.as_str().unwrap().ends_with(f)),
             "{f} listed"
+        );
+    }
+    // config.toml repeats the run (the outage from the command line included).
+    let again = dir.join("again");
+    navfuse_ok(&[
+        "run",
+        out.join("config.toml").to_str().unwrap(),
+        "--out",
+        again.to_str().unwrap(),
+        "-q",
+    ]);
+    for f in ["solution.nav", "innovations.csv", "states.csv"] {
+        assert_eq!(
+            std::fs::read(out.join(f)).unwrap(),
+            std::fs::read(again.join(f)).unwrap(),
+            "{f} from config.toml"
         );
     }
     std::fs::remove_dir_all(&dir).ok();
