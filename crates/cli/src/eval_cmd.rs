@@ -41,7 +41,25 @@ fn is_pos(path: &Path) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case("pos"))
 }
 
-fn parse_vec3(s: &str) -> Result<Vector3<f64>> {
+/// The reference trajectory in `path` (RTKLIB .pos with these qualities, else .nav).
+pub fn load_reference(path: &Path, quality: Vec<u8>) -> Result<Track> {
+    if is_pos(path) {
+        load_pos(path, quality)
+    } else {
+        load_nav(path)
+    }
+}
+
+/// `--quality Q,...`.
+pub fn parse_quality(quality: &str) -> Result<Vec<u8>> {
+    quality
+        .split(',')
+        .map(|q| q.trim().parse::<u8>())
+        .collect::<Result<_, _>>()
+        .with_context(|| format!("--quality '{quality}': expected comma-separated integers"))
+}
+
+pub fn parse_vec3(s: &str) -> Result<Vector3<f64>> {
     let v: Vec<f64> = s
         .split(',')
         .map(|x| x.trim().parse::<f64>())
@@ -64,16 +82,8 @@ pub fn main(
     json_out: bool,
 ) -> Result<()> {
     let sol = load_nav(solution)?;
-    let quality: Vec<u8> = quality
-        .split(',')
-        .map(|q| q.trim().parse::<u8>())
-        .collect::<Result<_, _>>()
-        .with_context(|| format!("--quality '{quality}': expected comma-separated integers"))?;
-    let mut reference = if is_pos(truth) {
-        load_pos(truth, quality)?
-    } else {
-        load_nav(truth)?
-    };
+    let quality = parse_quality(quality)?;
+    let mut reference = load_reference(truth, quality)?;
     if sol.points.is_empty() {
         bail!("{}: no solution epochs", solution.display());
     }

@@ -8,6 +8,7 @@
 #![allow(rustdoc::broken_intra_doc_links)]
 
 mod eval_cmd;
+mod report_cmd;
 mod run_cmd;
 mod sim_cmd;
 
@@ -109,6 +110,17 @@ enum Command {
         #[arg(long)]
         smoothed: bool,
     },
+    /// Write the HTML report of a finished run: one self-contained file (inline SVG,
+    /// style and script; opens offline) with the ground track coloured by solution
+    /// state, position / velocity / attitude against time, the innovations (NIS) of
+    /// every aiding source with their gates and rejections, the IMU error and extra
+    /// state estimates with their sigma, the solution-state timeline, the smoother's
+    /// separation, the run summary, configuration and events; with --truth also the
+    /// errors against time with +-3 sigma bands, the horizontal-error CDF with
+    /// P50/P68/P95, and the drift in each coasting interval. Long runs are thinned
+    /// for plotting (min/max decimation keeps every peak); the errors are scored at
+    /// up to 50 000 reference epochs against the full-rate solution.
+    Report(report_cmd::ReportArgs),
     /// Score a solution against a reference trajectory.
     ///
     /// SOLUTION is a KF-GINS .nav file; TRUTH is a .nav file (IMU-centre state with
@@ -315,6 +327,7 @@ fn main() -> ExitCode {
             formats,
             smoothed,
         } => export_main(&run_dir, &formats, smoothed),
+        Command::Report(a) => report_cmd::main(a),
         Command::Eval {
             solution,
             truth,

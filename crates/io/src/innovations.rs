@@ -32,9 +32,9 @@ impl InnovationWriter {
                 String::new()
             }
         };
-        let _ = write!(
+        let _ = writeln!(
             line,
-            "{:.4},{},{},{},{},{},{},{},{}\n",
+            "{:.4},{},{},{},{},{},{},{},{}",
             r.t,
             r.source,
             r.rows,
