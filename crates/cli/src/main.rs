@@ -261,6 +261,10 @@ enum Command {
     /// bias, time offset and rate), output at the IMU rate: wall time and peak memory
     /// of `navfuse run` without and with `--smooth`; PASS/FAIL against forward +
     /// backward <= 2.5x forward alone and peak memory <= 300 MiB.
+    ///
+    /// With --report: `navfuse report` on that hour (run with --smooth, not timed)
+    /// against its 200 Hz truth: wall time and peak memory of reading, thinning,
+    /// scoring, drawing and writing the page.
     Bench {
         /// KF-GINS YAML for the full run (default: ../shared/data/kf-gins/synthetic/kf-gins.yaml).
         #[arg(long, value_name = "FILE.yaml", conflicts_with = "tight")]
@@ -272,6 +276,10 @@ enum Command {
         /// Benchmark the smoother instead (one simulated hour at 200 Hz).
         #[arg(long, conflicts_with_all = ["tight", "kf_gins"])]
         smooth: bool,
+        /// Benchmark `navfuse report` instead (the same hour, smoothed, against its
+        /// truth).
+        #[arg(long, conflicts_with_all = ["tight", "kf_gins", "smooth"])]
+        report: bool,
         /// With --tight: seconds of data to simulate and navigate (at most the
         /// scenario's length, 1880 s for the built-in one).
         #[arg(long, value_name = "N", requires = "tight", default_value_t = navfuse_experiments::BENCH_TIGHT_DEFAULT_DURATION_S)]
@@ -378,6 +386,7 @@ fn main() -> ExitCode {
             kf_gins,
             tight,
             smooth,
+            report,
             duration_s,
             scenario,
             repeat,
@@ -386,6 +395,7 @@ fn main() -> ExitCode {
             kf_gins,
             tight,
             smooth,
+            report,
             duration_s,
             scenario,
             repeat,

@@ -87,6 +87,8 @@ pub struct BenchArgs {
     pub tight: bool,
     /// The smoother on one simulated hour at 200 Hz instead.
     pub smooth: bool,
+    /// `navfuse report` on one simulated hour at 200 Hz instead.
+    pub report: bool,
     /// With `tight`: seconds of data to simulate and navigate.
     pub duration_s: f64,
     /// With `tight`: a scenario file in place of the built-in one.
@@ -103,7 +105,9 @@ pub const BENCH_TIGHT_DEFAULT_DURATION_S: f64 = bench::tight::DEFAULT_DURATION_S
 /// `navfuse bench`: loose coupling on the KF-GINS stand-in, or with `tight` tight
 /// coupling on a simulated drive. Prints the figures on stdout.
 pub fn bench(a: &BenchArgs) -> Result<()> {
-    if a.smooth {
+    if a.report {
+        bench::report::main(a.repeat, a.json)
+    } else if a.smooth {
         bench::smooth::main(a.repeat, a.json)
     } else if a.tight {
         bench::tight::main(a.scenario.clone(), a.duration_s, a.repeat, a.json)

@@ -6,6 +6,7 @@
 //!    (reset between runs through /proc/self/clear_refs): it must not grow with length.
 //! 3. The core filter loop alone on samples already in memory: IMU samples per second.
 
+pub mod report;
 pub mod smooth;
 pub mod tight;
 

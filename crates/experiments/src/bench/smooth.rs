@@ -33,15 +33,16 @@ const SCENARIO_TEXT: &str = include_str!(concat!(
 pub const MAX_PEAK_MIB: f64 = 300.0;
 pub const MAX_TIME_RATIO: f64 = 2.5;
 
-struct Scratch(PathBuf);
+pub(crate) struct Scratch(pub PathBuf);
 impl Drop for Scratch {
     fn drop(&mut self) {
         let _ = std::fs::remove_dir_all(&self.0);
     }
 }
 
-pub fn main(repeat: usize, json_out: bool) -> Result<()> {
-    let repeat = repeat.max(1);
+/// Steps 1 and 2: the simulated hour in `scratch/sim` and its run configuration with
+/// every vehicle state on, output at the IMU rate.
+pub(crate) fn hour_config(scratch: &Scratch) -> Result<navfuse_io::config::RunConfig> {
     let base = builtin(SCENARIO_NAME, SCENARIO_TEXT)?;
     let mut file = base.file.clone();
     file.baro = Some(BaroSpec::default());
@@ -54,8 +55,6 @@ pub fn main(repeat: usize, json_out: bool) -> Result<()> {
         file,
         "barometer added; GNSS as receiver fixes only (no raw GNSS, heading, DGPS)",
     )?;
-    let scratch =
-        Scratch(std::env::temp_dir().join(format!("navfuse-bench-smooth-{}", std::process::id())));
     let sim_dir = scratch.0.join("sim");
     generate(&sc, &sim_dir)?;
     let mut cfg = navfuse_io::config::load(&sim_dir.join("run.toml"))?;
@@ -74,6 +73,14 @@ pub fn main(repeat: usize, json_out: bool) -> Result<()> {
     cfg.output.rate_hz = None;
     cfg.output.imu_err = true;
     cfg.output.std = true;
+    Ok(cfg)
+}
+
+pub fn main(repeat: usize, json_out: bool) -> Result<()> {
+    let repeat = repeat.max(1);
+    let scratch =
+        Scratch(std::env::temp_dir().join(format!("navfuse-bench-smooth-{}", std::process::id())));
+    let cfg = hour_config(&scratch)?;
     let out = scratch.0.join("out");
     let measure = |smooth: bool| -> Result<(f64, Option<u64>, navfuse_app::JobResult)> {
         let mut c = cfg.clone();
