@@ -171,7 +171,9 @@ enum Command {
     ///
     /// Simulates the experiment's scenario for each seed, runs every navigator variant
     /// on the same data, scores it against the truth and prints mean [min, max] over the
-    /// seeds beside the paper's figures, with the improvement (seed 002 eq. 18).
+    /// seeds beside the paper's figures (tables at most 100 columns wide, a legend of
+    /// the columns under them), with the improvement (base - variant) / base (the
+    /// formula of seed 002 eq. 18; the footer says what it means for each experiment).
     ///
     /// seed004 only: --attack, --jump-runs and --clean-hours replace the plain
     /// experiment by the spoofing ones (any combination; each is printed in turn, or

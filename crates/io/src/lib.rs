@@ -17,6 +17,7 @@ pub mod odometer;
 pub mod rinex_nav;
 pub mod rinex_obs;
 pub mod smoothed;
+pub mod table;
 pub mod time;
 pub mod timetag;
 
