@@ -1,6 +1,7 @@
 //! navfuse-io: file formats and configuration. Every reader reports bad input as an
 //! [`InputError`] naming the file, line and field; none panics.
 
+pub mod allan;
 pub mod baro;
 pub mod config;
 pub mod dgps;
