@@ -19,6 +19,7 @@
 //! `checks` + [`plausibility`]; [`sink`](SolutionSink) and [`FileSink`] (the writer
 //! thread, events.log, integrity.csv, summary.json); [`JobResult`] (summary.json).
 
+pub mod allan;
 mod checks;
 mod error;
 mod export;

@@ -1,12 +1,14 @@
 //! `navfuse`: the command line: clap, and one call per subcommand. `run_cmd` (the
 //! navigator over files, a thin call into `navfuse_app`), `eval_cmd` (scoring a
-//! solution file), `sim_cmd` (the simulator); `reproduce` (the papers' experiments)
+//! solution file), `sim_cmd` (the simulator), `allan_cmd` (Allan deviation of an IMU
+//! file, `navfuse_app::allan`); `reproduce` (the papers' experiments)
 //! and `bench` (speed, loose and tight coupling) are `navfuse_experiments`.
 
 // The doc comments below are clap's --help text, where `[spoofing]` names a TOML
 // section and `[m]` a unit; rustdoc is not their reader.
 #![allow(rustdoc::broken_intra_doc_links)]
 
+mod allan_cmd;
 mod eval_cmd;
 mod report_cmd;
 mod run_cmd;
@@ -188,7 +190,9 @@ enum Command {
     ///
     /// Simulates the experiment's scenario for each seed, runs every navigator variant
     /// on the same data, scores it against the truth and prints mean [min, max] over the
-    /// seeds beside the paper's figures, with the improvement (seed 002 eq. 18).
+    /// seeds beside the paper's figures (tables at most 100 columns wide, a legend of
+    /// the columns under them), with the improvement (base - variant) / base (the
+    /// formula of seed 002 eq. 18; the footer says what it means for each experiment).
     ///
     /// seed004 only: --attack, --jump-runs and --clean-hours replace the plain
     /// experiment by the spoofing ones (any combination; each is printed in turn, or
@@ -241,6 +245,19 @@ enum Command {
         #[arg(long, value_name = "H", default_value_t = 0.0)]
         clean_hours: f64,
     },
+    /// Allan deviation of an IMU file: the overlapping Allan deviation (IEEE 952) of the
+    /// three gyro and three accelerometer axes, with the angle / velocity random walk
+    /// (ARW, VRW: the -1/2 slope line fitted to the white-noise part, at tau = 1 s)
+    /// and the bias instability (the minimum / 0.664).
+    ///
+    /// Reads the file as `navfuse run` does: a KF-GINS IMU text file (increments) by
+    /// default, the CSV IMU layout with --format csv (t, gyro x y z, accel x y z; units
+    /// and quantity as below), or with --config a run configuration's [imu] input with
+    /// all its settings (any format, columns, units, axes). Prints a table per sensor
+    /// (gyro: deg/sqrt(h), deg/h; accel: m/s/sqrt(h), mGal); --out writes the curves
+    /// and the read-offs as CSV (docs/FORMATS.md "Allan deviation"). Record the IMU at
+    /// rest; an hour or more shows the bias instability.
+    Allan(allan_cmd::AllanArgs),
     /// Measure speed and memory: the core filter loop without I/O (samples/s) and a full
     /// run writing KF-GINS's three output files (wall time, peak memory); with --tight,
     /// tight coupling with 10 satellites on simulated data (required: 500x real time).
@@ -382,6 +399,7 @@ fn main() -> ExitCode {
             jump_runs,
             clean_hours,
         }),
+        Command::Allan(args) => allan_cmd::main(&args),
         Command::Bench {
             kf_gins,
             tight,

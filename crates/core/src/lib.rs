@@ -10,6 +10,7 @@
 
 pub mod aiding;
 pub(crate) mod alignment;
+pub mod allan;
 pub mod attitude;
 pub mod chi2;
 pub mod config;

@@ -1,6 +1,7 @@
 //! navfuse-io: file formats and configuration. Every reader reports bad input as an
 //! [`InputError`] naming the file, line and field; none panics.
 
+pub mod allan;
 pub mod baro;
 pub mod config;
 pub mod dgps;
@@ -18,6 +19,7 @@ pub mod odometer;
 pub mod rinex_nav;
 pub mod rinex_obs;
 pub mod smoothed;
+pub mod table;
 pub mod time;
 pub mod timetag;
 

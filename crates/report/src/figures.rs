@@ -94,7 +94,7 @@ pub fn draw(run: &RunData, truth: Option<&Truth>) -> Result<Report, Error> {
     };
     if run.stride > 1 {
         c.notes.push(format!(
-            "{} solution epochs; plotted: every {}th (then at most {} points per line by min/max decimation, which keeps every peak)",
+            "{} solution epochs; plotted: one in {} (then at most {} points per line by min/max decimation, which keeps every peak)",
             run.solution_rows, run.stride, 4 * BUCKETS
         ));
     }
@@ -454,7 +454,7 @@ fn errors(
         "errors: {} reference epochs of {} scored{} against the full-rate solution (interpolated between its neighbouring epochs)",
         rep.epochs,
         truth.path.display(),
-        if k > 1 { format!(" (every {k}th)") } else { String::new() }
+        if k > 1 { format!(" (one in {k})") } else { String::new() }
     ));
     stats_table(c, &rep, "Errors against the truth");
     let sol = &c.run.solution;

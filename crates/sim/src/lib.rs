@@ -5,12 +5,11 @@
 //!   WGS-84 mechanization; perfect IMU increments integrated over each interval.
 //! - [`random`]: seeded random streams and Gauss-Markov processes.
 //! - [`imu_model`]: IMU grades (presets and custom) applied to perfect increments.
-//! - [`allan`]: Allan deviation, to check the IMU models.
+//! - the Allan deviation that checks the IMU models is `navfuse_core::allan`.
 //! - [`gnss_sim`]: constellation, raw measurements with an error budget, DGPS, fixes,
 //!   dual-antenna heading, events.
 //! - [`generate`]: one streaming pass that writes every output file.
 
-pub mod allan;
 pub mod baro_sim;
 pub mod generate;
 pub mod gnss_sim;

@@ -185,6 +185,24 @@ mod tests {
     use super::*;
 
     #[test]
+    fn simulated_gm_matches_analytic_allan_curve() {
+        use navfuse_core::allan::{allan_deviation, gauss_markov_adev};
+        let (sigma, tau_c, dt) = (1.0, 2.0, 0.05);
+        let mut rng = Stream::new(13, "adev.gm");
+        let mut gm = GaussMarkov::new(sigma, tau_c, &mut rng);
+        let y: Vec<f64> = (0..1_000_000).map(|_| gm.step(dt, &mut rng)).collect();
+        let curve = allan_deviation(&y, dt, &[10, 40, 76, 200]);
+        for (t, a) in curve {
+            let expected = gauss_markov_adev(sigma, tau_c, t);
+            // 50 000 s = 25 000 correlation times: a few % at most.
+            assert!(
+                (a / expected - 1.0).abs() < 0.05,
+                "tau {t}: {a} vs {expected}"
+            );
+        }
+    }
+
+    #[test]
     fn stream_is_deterministic_and_names_differ() {
         let mut a = Stream::new(42, "imu.gyro.white");
         let mut b = Stream::new(42, "imu.gyro.white");

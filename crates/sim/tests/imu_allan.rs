@@ -10,7 +10,7 @@
 use std::time::Instant;
 
 use nalgebra::Vector3;
-use navfuse_sim::allan::{
+use navfuse_core::allan::{
     allan_deviation_integrated, bias_instability_from_minimum, bias_instability_gm_floor,
     log_slope, log_spaced_clusters, white_noise_coefficient,
 };

@@ -10,34 +10,80 @@ use serde_json::{json, Value};
 use super::reaction::{nan_or, reaction, transition_rows};
 use super::variants::{attack_window_rel, variants};
 use super::{navigate, simulate, AFTER_S, ATTACK_SCENARIO, ATTACK_TEXT};
-use crate::reproduce::{spread, Variant};
+use crate::reproduce::{spread, variant_list, Variant, MAX_WIDTH};
 use crate::scenarios::builtin;
 use crate::track::load_nav;
 use crate::work::WorkDir;
+use navfuse_io::table::{wrap_text, TextTable};
 
-/// The rows of the attack table: (key, label, decimals). Counts have 1 decimal (a
-/// mean over seeds).
-pub(super) const ROWS: [(&str, &str, usize); 11] = [
+/// The metrics of the attack tables: (key, column header, legend, decimals). Counts
+/// have 1 decimal (a mean over seeds). The first [`MONITOR_ROWS`] exist only for
+/// variants with a monitor.
+pub(super) const ROWS: [(&str, &str, &str, usize); 11] = [
     (
         "alarms_before",
-        "alarms before the attack (out of trusted)",
+        "alarms",
+        "alarms before the attack (transitions out of trusted)",
         1,
     ),
-    ("spoofed_before", "declared spoofed before the attack", 1),
-    ("delay_s", "detection delay after the attack start [s]", 1),
-    ("spoofed_delay_s", "declared spoofed after [s]", 1),
-    ("readmitted_during", "GNSS re-admitted during the attack", 1),
+    (
+        "spoofed_before",
+        "spoofed",
+        "declared spoofed before the attack",
+        1,
+    ),
+    (
+        "delay_s",
+        "delay [s]",
+        "detection delay after the attack start",
+        1,
+    ),
+    (
+        "spoofed_delay_s",
+        "spoof [s]",
+        "declared spoofed, this long after the attack start",
+        1,
+    ),
+    (
+        "readmitted_during",
+        "readmit",
+        "GNSS re-admitted during the attack",
+        1,
+    ),
     (
         "trusted_after_end_s",
-        "trusted again after the attack end [s]",
+        "trust [s]",
+        "trusted again, this long after the attack end",
         1,
     ),
-    ("max_h_attack_m", "max horizontal error, attack [m]", 2),
-    ("max_3d_attack_m", "max 3D error, attack [m]", 2),
-    ("max_h_after_m", "max horizontal error, 60 s after [m]", 2),
-    ("max_3d_after_m", "max 3D error, 60 s after [m]", 2),
-    ("rmse_3d_m", "3D RMSE over the run [m]", 2),
+    (
+        "max_h_attack_m",
+        "H attack [m]",
+        "max horizontal error during the attack",
+        2,
+    ),
+    (
+        "max_3d_attack_m",
+        "3D attack [m]",
+        "max 3D error during the attack",
+        2,
+    ),
+    (
+        "max_h_after_m",
+        "H after [m]",
+        "max horizontal error in the 60 s after the attack",
+        2,
+    ),
+    (
+        "max_3d_after_m",
+        "3D after [m]",
+        "max 3D error in the 60 s after the attack",
+        2,
+    ),
+    ("rmse_3d_m", "RMSE 3D [m]", "3D RMSE over the run", 2),
 ];
+/// ROWS[..MONITOR_ROWS] are the monitor's figures ("-" without a monitor).
+pub(super) const MONITOR_ROWS: usize = 6;
 
 /// One variant on one seed.
 #[derive(Clone, Debug)]
@@ -296,48 +342,79 @@ pub(super) fn paper_lines(r: &AttackResults) -> Vec<(&'static str, String)> {
 
 pub(super) fn attack_text(r: &AttackResults) -> String {
     let n = r.seeds.len();
-    let mut s = format!(
-        "Seed 004 spoofing: car, IMU500 + odometer + GNSS 1 Hz, two laps of the 3010 m loop; \
-drift attack 2 m/s east from {:.0} s to {:.0} s\n",
-        r.attack_rel.0, r.attack_rel.1
+    let mut s = wrap_text(
+        &format!(
+            "Seed 004 spoofing: car, IMU500 + odometer + GNSS 1 Hz, two laps of the 3010 m loop; \
+             drift attack 2 m/s east from {:.0} s to {:.0} s",
+            r.attack_rel.0, r.attack_rel.1
+        ),
+        MAX_WIDTH,
+        "",
+        "  ",
     );
-    s.push_str(&format!(
-        "scenario {ATTACK_SCENARIO}, seeds {:?}; mean [min, max] over seeds, (k/n) = seeds where it happened; \
-alarm = a transition out of trusted\n\n",
-        r.seeds
+    s.push_str(&wrap_text(
+        &format!(
+            "scenario {ATTACK_SCENARIO}, seeds {:?}; mean [min, max] over seeds, (k/n) = seeds \
+             where it happened; alarm = a transition out of trusted",
+            r.seeds
+        ),
+        MAX_WIDTH,
+        "",
+        "  ",
     ));
-    for (v, _) in &r.per_variant {
-        s.push_str(&format!("  {:<17} {}\n", v.name, v.label));
-    }
-    const W: usize = 25;
-    s.push_str(&format!("\n{:<44}", ""));
-    for (v, _) in &r.per_variant {
-        s.push_str(&format!(" {:>W$}", v.name));
-    }
     s.push('\n');
-    for (key, label, dec) in ROWS {
-        s.push_str(&format!("{label:<44}"));
-        for (v, runs) in &r.per_variant {
-            let monitor = runs.iter().any(|x| x.monitor);
-            let txt = if !monitor && ROWS[..6].iter().any(|(k, _, _)| *k == key) {
-                "-".to_string()
-            } else {
-                cell(&r.finite(v.name, key), n, dec)
-            };
-            s.push_str(&format!(" {txt:>W$}"));
+    s.push_str(&variant_list(r.per_variant.iter().map(|(v, _)| v)));
+    s.push('\n');
+    // Two tables, detection then errors, each a row per variant.
+    let mut detection: Vec<String> = vec!["variant".into()];
+    for (k, (_, header, _, _)) in ROWS[..MONITOR_ROWS].iter().enumerate() {
+        detection.push(header.to_string());
+        if k == 2 {
+            detection.push("detector".into());
         }
-        s.push('\n');
-        if key == "delay_s" {
-            s.push_str(&format!("{:<44}", "  detector"));
-            for (_, runs) in &r.per_variant {
-                s.push_str(&format!(" {:>W$}", detectors(runs)));
+    }
+    // The detector names are text.
+    let mut det = TextTable::new(detection).left_aligned(&[4]);
+    let mut err =
+        TextTable::new(std::iter::once("variant").chain(ROWS[MONITOR_ROWS..].iter().map(|r| r.1)));
+    for (v, runs) in &r.per_variant {
+        let monitor = runs.iter().any(|x| x.monitor);
+        let value = |key: &str, dec: usize| cell(&r.finite(v.name, key), n, dec);
+        let mut row = vec![v.name.to_string()];
+        for (k, (key, _, _, dec)) in ROWS[..MONITOR_ROWS].iter().enumerate() {
+            row.push(if monitor {
+                value(key, *dec)
+            } else {
+                "-".into()
+            });
+            if k == 2 {
+                row.push(if monitor { detectors(runs) } else { "-".into() });
             }
-            s.push('\n');
+        }
+        det.row(row);
+        let mut row = vec![v.name.to_string()];
+        row.extend(
+            ROWS[MONITOR_ROWS..]
+                .iter()
+                .map(|(key, _, _, dec)| value(key, *dec)),
+        );
+        err.row(row);
+    }
+    s.push_str("detection (- = no monitor):\n");
+    s.push_str(&det.render_wrapped(MAX_WIDTH));
+    s.push_str("\nerrors:\n");
+    s.push_str(&err.render_wrapped(MAX_WIDTH));
+    s.push_str("\ncolumns:\n");
+    for (k, (_, header, legend, _)) in ROWS.iter().enumerate() {
+        s.push_str(&format!("  {header}: {legend}\n"));
+        if k == 2 {
+            s.push_str("  detector: the detector that raised the alarm (x N: in N seeds)\n");
         }
     }
     s.push_str("\npaper (SYSTEM.md §7 seed 004 row, §5) and ours:\n");
     for (p, ours) in paper_lines(r) {
-        s.push_str(&format!("  {p}\n      ours: {ours}\n"));
+        s.push_str(&wrap_text(p, MAX_WIDTH, "  ", "    "));
+        s.push_str(&wrap_text(&ours, MAX_WIDTH, "      ours: ", "            "));
     }
     s
 }
@@ -348,7 +425,7 @@ pub(super) fn attack_json(r: &AttackResults) -> Value {
         .iter()
         .map(|(v, runs)| {
             let mut metrics = serde_json::Map::new();
-            for (key, _, _) in ROWS {
+            for (key, _, _, _) in ROWS {
                 let per_seed: Vec<Value> = runs
                     .iter()
                     .map(|x| {
@@ -399,4 +476,54 @@ pub(super) fn attack_json(r: &AttackResults) -> Value {
            "attack": {"mode": "drift", "velocity_mps": [0.0, 2.0, 0.0],
                       "start_s": r.attack_rel.0, "end_s": r.attack_rel.1},
            "variants": variants, "paper": paper})
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use navfuse_io::table::max_line_width;
+
+    /// Results as `--seeds n` could give them, without running anything: wide cells
+    /// (mean [min, max] (k/n)) on every variant.
+    fn results(n: usize) -> AttackResults {
+        let per_variant = variants()
+            .into_iter()
+            .enumerate()
+            .map(|(k, v)| {
+                let runs = (0..n)
+                    .map(|s| VariantRun {
+                        monitor: k % 3 != 0,
+                        values: ROWS
+                            .iter()
+                            .map(|(key, ..)| {
+                                (*key, if s == 0 { f64::NAN } else { 600.5 + s as f64 })
+                            })
+                            .collect(),
+                        detector: Some("already spoofed".into()),
+                        transitions: vec![],
+                    })
+                    .collect();
+                (v, runs)
+            })
+            .collect();
+        AttackResults {
+            seeds: (1..=n as u64).collect(),
+            attack_rel: (150.0, 450.0),
+            per_variant,
+        }
+    }
+
+    #[test]
+    fn attack_tables_fit_in_100_columns() {
+        for n in [1, 4] {
+            let s = attack_text(&results(n));
+            assert!(max_line_width(&s) <= MAX_WIDTH, "{s}");
+            // Every metric's header is printed, with its legend line.
+            for (_, header, legend, _) in ROWS {
+                assert!(s.contains(&format!("  {header}: {legend}")), "{header}");
+            }
+            // Cells are apart: "600.500" never touches the next value.
+            assert!(!s.contains("]6") && !s.contains(")6"), "{s}");
+        }
+    }
 }

@@ -27,6 +27,42 @@ pub(crate) const METRICS: [&str; 8] = [
     "rmse_att3d_deg",
 ];
 
+/// A metric's column header (short, with its unit) and its legend line.
+pub(crate) fn metric_label(key: &str) -> (String, String) {
+    let fixed = |h: &str, l: &str| (h.to_string(), l.to_string());
+    match key {
+        "rmse_n_m" => fixed("N [m]", "RMSE of the north position error"),
+        "rmse_e_m" => fixed("E [m]", "RMSE of the east position error"),
+        "rmse_d_m" => fixed("D [m]", "RMSE of the down position error"),
+        "rmse_3d_m" => fixed("3D [m]", "RMSE of the 3D position error"),
+        "rmse_roll_deg" => fixed("roll [deg]", "RMSE of the roll error"),
+        "rmse_pitch_deg" => fixed("pitch [deg]", "RMSE of the pitch error"),
+        "rmse_yaw_deg" => fixed("yaw [deg]", "RMSE of the yaw (heading) error"),
+        "rmse_att3d_deg" => fixed(
+            "att [deg]",
+            "attitude RMSE, sqrt(roll² + pitch² + yaw²) of the three RMSEs",
+        ),
+        "end_error_m" => fixed(
+            "end [m]",
+            "horizontal error at the end of the loop (back at the start)",
+        ),
+        "end_error_pct_distance" => fixed("end [%]", "end error in % of the distance driven"),
+        "error_6min_m" => fixed("6 min [m]", "horizontal error 6 min after the start"),
+        "mean_3d_m" => fixed(
+            "mean [m]",
+            "mean 3D position error over every whole second of the run",
+        ),
+        other => match TABLE4_METRICS.iter().position(|m| *m == other) {
+            Some(k) => (
+                format!("{:.0} s [m]", TABLE4_TIMES_S[k]),
+                "3D position error at that time after the start (seed 000 Table 4 epochs)"
+                    .to_string(),
+            ),
+            None => (other.to_string(), String::new()),
+        },
+    }
+}
+
 /// Seed 004: error at the end of the closed loop (return to start), in metres and in
 /// % of the distance driven, and the error 6 min after the start.
 pub(crate) const CLOSED_LOOP_METRICS: [&str; 5] = [

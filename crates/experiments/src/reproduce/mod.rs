@@ -30,7 +30,7 @@ use crate::work::WorkDir;
 
 use metrics::{closed_loop_metrics, metrics_of, table4_metrics, Metrics};
 use papers::{experiment, GNSS_ONLY};
-pub(crate) use report::spread;
+pub(crate) use report::{spread, variant_list, MAX_WIDTH};
 use report::{to_json, to_text};
 
 /// One navigator configuration of an experiment.
@@ -57,6 +57,9 @@ pub(crate) struct Experiment {
     pub(crate) paper: Vec<PaperFigure>,
     /// Improvement checks: (metric, base variant, variant, claimed fraction).
     pub(crate) claims: Vec<(&'static str, &'static str, &'static str, f64)>,
+    /// What the improvement `(base - variant) / base` means for this experiment's
+    /// figures, and where the paper states it (the table's footer).
+    pub(crate) improvement: &'static str,
     /// Metrics shown (METRICS, CLOSED_LOOP_METRICS).
     pub(crate) metrics: &'static [&'static str],
 }

@@ -1,9 +1,14 @@
 //! The result tables: mean [min, max] over seeds beside the paper's figures, and the
-//! improvements (seed 002 eq. 18), as text or JSON.
+//! improvements `(base - variant) / base` (the formula of seed 002 eq. 18; each
+//! experiment says what it means for its figures), as text or JSON.
 
 use serde_json::{json, Value};
 
-use super::{Experiment, Results};
+pub(crate) use navfuse_io::table::MAX_WIDTH;
+use navfuse_io::table::{wrap_text, TextTable};
+
+use super::metrics::metric_label;
+use super::{Experiment, Results, Variant};
 
 /// Mean, min and max over seeds.
 pub(crate) fn spread(xs: &[f64]) -> (f64, f64, f64) {
@@ -21,7 +26,8 @@ pub(crate) fn values(r: &Results, variant: &str, metric: &str) -> Vec<f64> {
         .unwrap_or_default()
 }
 
-/// Improvement of the mean (seed 002 eq. 18) and its per-seed range.
+/// Improvement of the mean, `(base - new) / base` (seed 002 eq. 18), and its per-seed
+/// range.
 pub(crate) fn improvement(r: &Results, metric: &str, base: &str, new: &str) -> (f64, f64, f64) {
     let b = values(r, base, metric);
     let n = values(r, new, metric);
@@ -32,62 +38,157 @@ pub(crate) fn improvement(r: &Results, metric: &str, base: &str, new: &str) -> (
     ((mb - mn) / mb, lo, hi)
 }
 
-pub(crate) fn to_text(ex: &Experiment, r: &Results) -> String {
-    let mut s = format!("{}\n", ex.title);
-    s.push_str(&format!(
-        "scenario {}, seeds {:?}; RMSE over the whole run, mean [min, max] over seeds\n\n",
-        ex.scenario_name, r.seeds
-    ));
-    for v in &ex.variants {
-        s.push_str(&format!("  {:<14} {}\n", v.name, v.label));
+/// A value for the text tables: 3 decimals below 100, fewer above (the JSON keeps
+/// every digit).
+pub(crate) fn num(x: f64) -> String {
+    match x.abs() {
+        a if a < 100.0 => format!("{x:.3}"),
+        a if a < 1000.0 => format!("{x:.2}"),
+        _ => format!("{x:.1}"),
     }
-    s.push_str(&format!("\n{:<24}", "metric"));
-    for v in &ex.variants {
-        s.push_str(&format!("{:>26}", v.name));
+}
+
+/// "mean [min, max]" over seeds; the mean alone for one seed; "n/a" for none.
+fn spread_cell(xs: &[f64]) -> String {
+    if xs.is_empty() {
+        return "n/a".into();
     }
-    s.push_str("   paper\n");
-    for &m in ex.metrics {
-        s.push_str(&format!("{m:<24}"));
-        for v in &ex.variants {
-            let xs = values(r, v.name, m);
-            let cell = if xs.is_empty() {
-                "n/a".to_string()
-            } else {
-                let (mean, lo, hi) = spread(&xs);
-                format!("{mean:.3} [{lo:.3}, {hi:.3}]")
-            };
-            s.push_str(&format!("{cell:>26}"));
+    let (mean, lo, hi) = spread(xs);
+    if xs.len() == 1 {
+        num(mean)
+    } else {
+        format!("{} [{}, {}]", num(mean), num(lo), num(hi))
+    }
+}
+
+/// The legend of the metric columns: "header: what it is", consecutive columns with
+/// the same explanation on one line ("0 s [m] .. 500 s [m]: ...").
+pub(crate) fn legend(metrics: &[&str]) -> String {
+    let labels: Vec<(String, String)> = metrics.iter().map(|m| metric_label(m)).collect();
+    let mut s = String::new();
+    let mut k = 0;
+    while k < labels.len() {
+        let mut j = k;
+        while j + 1 < labels.len() && labels[j + 1].1 == labels[k].1 {
+            j += 1;
         }
-        let paper: Vec<String> = ex
-            .paper
-            .iter()
-            .filter(|p| p.metric == m)
-            .map(|p| format!("{} {}", p.variant, p.value))
-            .collect();
-        s.push_str(&format!("   {}\n", paper.join(", ")));
+        let name = if j > k {
+            format!("{} .. {}", labels[k].0, labels[j].0)
+        } else {
+            labels[k].0.clone()
+        };
+        s.push_str(&format!("  {name}: {}\n", labels[k].1));
+        k = j + 1;
     }
-    s.push_str("\nimprovement (seed 002 eq. 18), ours vs the paper's claim:\n");
+    s
+}
+
+/// The results table: a row per variant (mean [min, max] over seeds), under it the
+/// paper's figures for that variant; a column per metric; wrapped to MAX_WIDTH.
+fn results_table(ex: &Experiment, r: &Results) -> TextTable {
+    let mut header = vec!["variant".to_string()];
+    header.extend(ex.metrics.iter().map(|m| metric_label(m).0));
+    let mut t = TextTable::new(header);
+    for v in &ex.variants {
+        let mut row = vec![v.name.to_string()];
+        row.extend(
+            ex.metrics
+                .iter()
+                .map(|m| spread_cell(&values(r, v.name, m))),
+        );
+        t.row(row);
+        let paper: Vec<String> = ex
+            .metrics
+            .iter()
+            .map(|m| {
+                ex.paper
+                    .iter()
+                    .find(|p| p.metric == *m && p.variant == v.name)
+                    .map_or(String::new(), |p| p.value.to_string())
+            })
+            .collect();
+        if paper.iter().any(|c| !c.is_empty()) {
+            let mut row = vec!["  paper".to_string()];
+            row.extend(paper);
+            t.row(row);
+        }
+    }
+    t
+}
+
+/// The improvements (the claims first), ours beside the paper's claim.
+fn improvement_table(ex: &Experiment, r: &Results) -> TextTable {
+    let mut t = TextTable::new([
+        "metric",
+        "base -> variant",
+        "ours [%]",
+        "per seed [%]",
+        "claim [%]",
+        "claim",
+    ])
+    .left_aligned(&[1, 5]);
     for (metric, base, new) in improvement_rows(ex) {
         let (imp, lo, hi) = improvement(r, metric, base, new);
         let claim = ex
             .claims
             .iter()
-            .find(|c| c.0 == metric && c.1 == base && c.2 == new)
-            .map(|c| {
-                format!(
-                    "  claim >= {:.0} %: {}",
-                    c.3 * 100.0,
-                    if imp >= c.3 { "met" } else { "NOT met" }
-                )
-            })
-            .unwrap_or_default();
-        s.push_str(&format!(
-            "  {metric:<16} {base} -> {new}: {:6.1} % (per seed {:.1} .. {:.1} %){claim}\n",
-            imp * 100.0,
-            lo * 100.0,
-            hi * 100.0
+            .find(|c| c.0 == metric && c.1 == base && c.2 == new);
+        t.row([
+            metric_label(metric).0,
+            format!("{base} -> {new}"),
+            format!("{:.1}", imp * 100.0),
+            format!("{:.1} .. {:.1}", lo * 100.0, hi * 100.0),
+            claim.map_or(String::new(), |c| format!(">= {:.0}", c.3 * 100.0)),
+            claim.map_or(String::new(), |c| {
+                if imp >= c.3 { "met" } else { "NOT met" }.to_string()
+            }),
+        ]);
+    }
+    t
+}
+
+/// The variants, a line each: name and what it adds, wrapped to MAX_WIDTH.
+pub(crate) fn variant_list<'a>(variants: impl Iterator<Item = &'a Variant> + Clone) -> String {
+    let names = variants.clone().map(|v| v.name.len()).max().unwrap_or(0);
+    let mut s = String::new();
+    for v in variants {
+        let first = format!("  {:<names$} ", v.name);
+        s.push_str(&wrap_text(
+            v.label,
+            MAX_WIDTH,
+            &first,
+            &" ".repeat(names + 3),
         ));
     }
+    s
+}
+
+pub(crate) fn to_text(ex: &Experiment, r: &Results) -> String {
+    let mut s = wrap_text(ex.title, MAX_WIDTH, "", "  ");
+    s.push_str(&wrap_text(
+        &format!(
+            "scenario {}, seeds {:?}; each cell: mean [min, max] over the seeds (one seed: its value)",
+            ex.scenario_name, r.seeds
+        ),
+        MAX_WIDTH,
+        "",
+        "  ",
+    ));
+    s.push('\n');
+    s.push_str(&variant_list(ex.variants.iter()));
+    s.push('\n');
+    s.push_str(&results_table(ex, r).render_wrapped(MAX_WIDTH));
+    s.push_str("\ncolumns:\n");
+    s.push_str(&legend(ex.metrics));
+    s.push_str("  paper: the paper's figure (SYSTEM.md §7), where it reports one\n");
+    s.push_str("\nimprovement of each variant over the base, ours beside the paper's claim:\n");
+    s.push_str(&improvement_table(ex, r).render_wrapped(MAX_WIDTH));
+    s.push_str(&wrap_text(
+        &format!("improvement = (base - variant) / base {}", ex.improvement),
+        MAX_WIDTH,
+        "  ",
+        "    ",
+    ));
     s
 }
 
@@ -144,4 +245,64 @@ pub(crate) fn to_json(ex: &Experiment, r: &Results) -> Value {
         .collect();
     json!({"experiment": ex.id, "title": ex.title, "scenario": ex.scenario_name,
            "seeds": r.seeds, "variants": variants, "claims": claims, "paper": paper})
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::metrics::Metrics;
+    use super::super::papers::experiment;
+    use super::*;
+    use navfuse_io::table::max_line_width;
+
+    /// Wide values (thousands, three decimals, over several seeds) on every metric of
+    /// every variant.
+    fn results(ex: &Experiment, seeds: usize) -> Results {
+        Results {
+            seeds: (1..=seeds as u64).collect(),
+            per_variant: ex
+                .variants
+                .iter()
+                .map(|v| {
+                    let ms = (0..seeds)
+                        .map(|s| Metrics {
+                            values: ex
+                                .metrics
+                                .iter()
+                                .map(|m| (*m, 1234.5678 + s as f64))
+                                .collect(),
+                        })
+                        .collect();
+                    (v.name, ms)
+                })
+                .collect(),
+        }
+    }
+
+    #[test]
+    fn tables_fit_in_100_columns_with_columns_apart() {
+        for id in ["seed000", "seed001", "seed002", "seed004"] {
+            let ex = experiment(id).unwrap();
+            for seeds in [1, 4] {
+                let s = to_text(&ex, &results(&ex, seeds));
+                assert!(max_line_width(&s) <= MAX_WIDTH, "{id}:\n{s}");
+                // Values never run together: a value is followed by a space, a
+                // bracket or the line end.
+                assert!(!s.contains(".61234") && !s.contains("]1234"), "{id}:\n{s}");
+                // Every metric has its column and a legend line.
+                for m in ex.metrics {
+                    assert!(s.contains(&metric_label(m).0), "{id} {m}");
+                }
+                assert!(s.contains("improvement = (base - variant) / base"));
+            }
+        }
+    }
+
+    #[test]
+    fn each_experiment_names_its_own_improvement_source() {
+        let footer = |id: &str| experiment(id).unwrap().improvement;
+        assert!(footer("seed002").contains("seed 002 eq. 18"));
+        assert!(footer("seed000").contains("seed 000"));
+        assert!(footer("seed001").contains("seed 001"));
+        assert!(footer("seed004").contains("seed 004"));
+    }
 }

@@ -13,13 +13,13 @@
 //!
 //! Bias instability `B` follows the IEEE Std 952-1997 convention (Allan floor
 //! `0.664 B`); the GM sigma is `0.664 B / 0.617364` so its Allan maximum (at
-//! `tau = 1.89 T`) reaches that floor ([`crate::allan`]).
+//! `tau = 1.89 T`) reaches that floor ([`navfuse_core::allan`]).
 
 use std::f64::consts::PI;
 
 use serde::Deserialize;
 
-use crate::allan::gm_sigma_for_bias_instability;
+use navfuse_core::allan::gm_sigma_for_bias_instability;
 
 mod error_model;
 #[cfg(test)]

@@ -1,5 +1,6 @@
-//! Allan deviation (IEEE Std 952-1997, Annex C) and read-outs of the noise terms, to
-//! check the IMU error models against their configured figures.
+//! Allan deviation (IEEE Std 952-1997, Annex C) and read-outs of the noise terms: what
+//! `navfuse allan` computes for an IMU file ([`imu`]) and what the simulator's tests
+//! check its IMU error models with.
 //!
 //! The overlapping Allan variance is computed from the integrated signal (angle or
 //! velocity) `x_k`, `x_0 = 0`, `x_{k+1} = x_k + increment_k`:
@@ -18,6 +19,8 @@
 //! It has no floor but a maximum: `0.617364 s` at `tau = 1.8926 T` (found numerically;
 //! see the test `gm_peak_constants`). The IMU model therefore sets
 //! `s = 0.664 B / 0.617364` so that its bump reaches the flicker floor `0.664 B`.
+
+pub mod imu;
 
 /// Flicker floor factor: `sigma_floor = 0.664 B` (IEEE 952 Annex C; sqrt(2 ln 2 / pi)).
 pub const FLICKER_FLOOR_FACTOR: f64 = 0.664;
@@ -87,10 +90,27 @@ pub fn allan_deviation(samples: &[f64], dt_s: f64, clusters: &[usize]) -> Vec<(f
     allan_deviation_integrated(&x, dt_s, clusters)
 }
 
+/// One point of an Allan-deviation curve.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AllanPoint {
+    /// Averaging time `tau = m dt` \[s\].
+    pub tau_s: f64,
+    /// Allan deviation at `tau`, in the unit of the rate (rad/s, m/s², ...).
+    pub adev: f64,
+    /// Cluster size `m` (samples per average).
+    pub m: usize,
+    /// Independent (non-overlapping) clusters in the record, `floor(n / m)`.
+    pub clusters: usize,
+    /// 1-sigma relative error of `adev`, `1 / sqrt(2 (clusters - 1))` (IEEE 952
+    /// Annex C, the usual error bar; conservative for the overlapping estimate):
+    /// the error bar is `adev (1 +- rel_error)`. Infinite for one cluster.
+    pub rel_error: f64,
+}
+
 /// Overlapping Allan deviation from the integrated signal `x` (`x[k]` at `k dt_s`,
-/// e.g. the running sum of angle increments). Cluster sizes with `2m >= x.len()` or
-/// `m = 0` are skipped.
-pub fn allan_deviation_integrated(x: &[f64], dt_s: f64, clusters: &[usize]) -> Vec<(f64, f64)> {
+/// e.g. the running sum of angle increments), with the error bar of each point.
+/// Cluster sizes with `2m >= x.len()` or `m = 0` are skipped.
+pub fn allan_points(x: &[f64], dt_s: f64, clusters: &[usize]) -> Vec<AllanPoint> {
     let l = x.len();
     let mut out = Vec::with_capacity(clusters.len());
     for &m in clusters {
@@ -104,9 +124,29 @@ pub fn allan_deviation_integrated(x: &[f64], dt_s: f64, clusters: &[usize]) -> V
             sum += d * d;
         }
         let tau = m as f64 * dt_s;
-        out.push((tau, (sum / (2.0 * tau * tau * terms as f64)).sqrt()));
+        let independent = (l - 1) / m;
+        out.push(AllanPoint {
+            tau_s: tau,
+            adev: (sum / (2.0 * tau * tau * terms as f64)).sqrt(),
+            m,
+            clusters: independent,
+            rel_error: if independent > 1 {
+                1.0 / (2.0 * (independent as f64 - 1.0)).sqrt()
+            } else {
+                f64::INFINITY
+            },
+        });
     }
     out
+}
+
+/// Overlapping Allan deviation from the integrated signal `x` as `(tau_s, adev)`
+/// ([`allan_points`] without the error bars).
+pub fn allan_deviation_integrated(x: &[f64], dt_s: f64, clusters: &[usize]) -> Vec<(f64, f64)> {
+    allan_points(x, dt_s, clusters)
+        .iter()
+        .map(|p| (p.tau_s, p.adev))
+        .collect()
 }
 
 /// White-noise coefficient `N` (ARW or VRW, units/sqrt(s)) from the points with
@@ -176,7 +216,19 @@ pub fn bias_instability_gm_floor(curve: &[(f64, f64)], white_n: f64) -> Option<(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::random::{GaussMarkov, Stream};
+    use rand::{RngExt, SeedableRng};
+
+    /// Standard normal samples (Box-Muller), seeded.
+    pub(crate) fn normals(seed: u64, n: usize) -> Vec<f64> {
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+        (0..n)
+            .map(|_| {
+                let u1: f64 = 1.0 - rng.random::<f64>();
+                let u2: f64 = rng.random::<f64>();
+                (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
+            })
+            .collect()
+    }
 
     #[test]
     fn gm_peak_constants() {
@@ -206,9 +258,9 @@ mod tests {
     fn white_noise_adev_is_n_over_sqrt_tau() {
         // Rate samples of white noise with density N: per-sample std N / sqrt(dt).
         let (n_coef, dt) = (0.3f64, 0.01f64);
-        let mut rng = Stream::new(11, "adev.white");
-        let y: Vec<f64> = (0..400_000)
-            .map(|_| n_coef / dt.sqrt() * rng.normal())
+        let y: Vec<f64> = normals(11, 400_000)
+            .iter()
+            .map(|z| n_coef / dt.sqrt() * z)
             .collect();
         let curve = allan_deviation(&y, dt, &log_spaced_clusters(y.len(), 10));
         for &(t, a) in curve.iter().filter(|(t, _)| *t <= 40.0) {
@@ -227,9 +279,8 @@ mod tests {
 
     #[test]
     fn rate_and_integrated_forms_agree() {
-        let mut rng = Stream::new(12, "adev.agree");
         let dt = 0.5;
-        let y: Vec<f64> = (0..5000).map(|_| 1.0 + rng.normal()).collect();
+        let y: Vec<f64> = normals(12, 5000).iter().map(|z| 1.0 + z).collect();
         let mut x = vec![0.0];
         for v in &y {
             x.push(x.last().unwrap() + v * dt);
@@ -241,23 +292,6 @@ mod tests {
         for (p, q) in a.iter().zip(&b) {
             assert_eq!(p.0, q.0);
             assert!((p.1 / q.1 - 1.0).abs() < 1e-9);
-        }
-    }
-
-    #[test]
-    fn simulated_gm_matches_analytic_curve() {
-        let (sigma, tau_c, dt) = (1.0, 2.0, 0.05);
-        let mut rng = Stream::new(13, "adev.gm");
-        let mut gm = GaussMarkov::new(sigma, tau_c, &mut rng);
-        let y: Vec<f64> = (0..1_000_000).map(|_| gm.step(dt, &mut rng)).collect();
-        let curve = allan_deviation(&y, dt, &[10, 40, 76, 200]);
-        for (t, a) in curve {
-            let expected = gauss_markov_adev(sigma, tau_c, t);
-            // 50 000 s = 25 000 correlation times: a few % at most.
-            assert!(
-                (a / expected - 1.0).abs() < 0.05,
-                "tau {t}: {a} vs {expected}"
-            );
         }
     }
 
