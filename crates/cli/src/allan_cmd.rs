@@ -44,6 +44,10 @@ pub struct AllanArgs {
     /// and mGal) and the read-offs beside it as STEM_readoffs.csv.
     #[arg(long, value_name = "FILE.csv")]
     pub out: Option<PathBuf>,
+    /// Plot the curves into DIR/allan_gyro.svg and DIR/allan_accel.svg (log-log,
+    /// with error bands, the fitted random-walk line and the bias-instability point).
+    #[arg(long, value_name = "DIR")]
+    pub svg: Option<PathBuf>,
 }
 
 /// The IMU source: the configuration's `[imu]`, or the file with the options given.
@@ -112,6 +116,14 @@ pub fn main(a: &AllanArgs) -> Result<()> {
     if let Some(out) = &a.out {
         let ro = navfuse_io::allan::write_allan_csv(out, al)?;
         eprintln!("navfuse: wrote {} and {}", out.display(), ro.display());
+    }
+    if let Some(dir) = &a.svg {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+        for f in navfuse_report::allan::allan_figures(al)? {
+            let p = dir.join(format!("{}.svg", f.name));
+            std::fs::write(&p, &f.svg).with_context(|| format!("cannot write {}", p.display()))?;
+            eprintln!("navfuse: wrote {}", p.display());
+        }
     }
     Ok(())
 }

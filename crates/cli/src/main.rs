@@ -255,8 +255,8 @@ enum Command {
     /// and quantity as below), or with --config a run configuration's [imu] input with
     /// all its settings (any format, columns, units, axes). Prints a table per sensor
     /// (gyro: deg/sqrt(h), deg/h; accel: m/s/sqrt(h), mGal); --out writes the curves
-    /// and the read-offs as CSV (docs/FORMATS.md "Allan deviation"). Record the IMU at
-    /// rest; an hour or more shows the bias instability.
+    /// and the read-offs as CSV, --svg DIR plots them (docs/FORMATS.md "Allan
+    /// deviation"). Record the IMU at rest; an hour or more shows the bias instability.
     Allan(allan_cmd::AllanArgs),
     /// Measure speed and memory: the core filter loop without I/O (samples/s) and a full
     /// run writing KF-GINS's three output files (wall time, peak memory); with --tight,

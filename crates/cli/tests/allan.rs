@@ -85,9 +85,27 @@ fn random_walks_of_a_simulated_imu_within_10_percent() {
         assert_eq!(curves.lines().nth(1).unwrap().split(',').count(), 10);
         // The run configuration the simulator wrote names the same IMU: same figures.
         let cfg = dir.join("sim/run.toml");
-        let by_config = navfuse_ok(&["allan", "--config", cfg.to_str().unwrap()]);
+        let svg = dir.join("svg");
+        let by_config = navfuse_ok(&[
+            "allan",
+            "--config",
+            cfg.to_str().unwrap(),
+            "--svg",
+            svg.to_str().unwrap(),
+        ]);
         let strip = |s: &str| s.lines().skip(1).collect::<Vec<_>>().join("\n");
         assert_eq!(strip(&by_config), strip(&text));
+        // The plots: one per sensor, every axis with its random-walk line.
+        for sensor in ["gyro", "accel"] {
+            let s = std::fs::read_to_string(svg.join(format!("allan_{sensor}.svg"))).unwrap();
+            assert!(s.starts_with("<svg") && !s.contains("NaN"), "{sensor}");
+            let name = if sensor == "gyro" { "ARW" } else { "VRW" };
+            assert_eq!(s.matches(name).count(), 3, "{sensor}: three {name} lines");
+            assert!(
+                s.matches("<polyline").count() >= 6,
+                "{sensor}: curves and fits"
+            );
+        }
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

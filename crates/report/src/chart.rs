@@ -248,15 +248,17 @@ impl Chart {
                 continue;
             }
             let colour = b.colour;
-            c.draw_series(std::iter::once(Polygon::new(
-                poly,
-                colour.mix(0.18).filled(),
-            )))
-            .map_err(err)?
-            .label(&b.name)
-            .legend(move |(x, y)| {
-                Rectangle::new([(x, y - 4), (x + 16, y + 4)], colour.mix(0.3).filled())
-            });
+            let drawn = c
+                .draw_series(std::iter::once(Polygon::new(
+                    poly,
+                    colour.mix(0.18).filled(),
+                )))
+                .map_err(err)?;
+            if !b.name.is_empty() {
+                drawn.label(&b.name).legend(move |(x, y)| {
+                    Rectangle::new([(x, y - 4), (x + 16, y + 4)], colour.mix(0.3).filled())
+                });
+            }
         }
         for s in &self.series {
             let colour = s.colour;
@@ -300,7 +302,7 @@ impl Chart {
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], colour));
         }
         let named = self.series.iter().any(|s| !s.name.is_empty())
-            || !self.bands.is_empty()
+            || self.bands.iter().any(|b| !b.name.is_empty())
             || !self.hlines.is_empty();
         if named {
             c.configure_series_labels()

@@ -7,6 +7,7 @@
 //! Layering: reads navfuse-io formats and scores with navfuse-core's `eval`; the
 //! truth comes in as trajectory points (the CLI reads its format).
 
+pub mod allan;
 pub mod chart;
 pub mod decimate;
 pub mod figures;
