@@ -5,23 +5,12 @@
 
 mod common;
 
-use common::{navfuse_ok, simulate, tmp};
-use std::path::Path;
+use common::{navfuse_ok, sim_and_run};
 use std::process::Command;
 
 #[test]
 fn seed000_uav_attitude_and_percentiles_against_numpy() {
-    let dir = tmp("eval-uav");
-    let sim = dir.join("sim");
-    simulate(Path::new("scenarios/seed000_uav.toml"), &sim);
-    let out = dir.join("out");
-    navfuse_ok(&[
-        "run",
-        sim.join("run.toml").to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "-q",
-    ]);
+    let (dir, sim, out) = sim_and_run("eval-uav", "scenarios/seed000_uav.toml", &[]);
     let errors = dir.join("errors.csv");
     let j = navfuse_ok(&[
         "eval",

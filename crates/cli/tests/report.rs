@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{navfuse_ok, run_demo, simulate, tmp};
+use common::{navfuse_ok, run_demo, sim_and_run, tmp};
 use std::path::Path;
 use std::process::Command;
 
@@ -207,20 +207,11 @@ fn report_of_the_demo_drive_with_an_outage_and_smoothing() {
 
 #[test]
 fn report_of_a_simulated_run_with_truth() {
-    let dir = tmp("report-sim");
-    let sim = dir.join("sim");
-    simulate(Path::new("scenarios/seed002_car.toml"), &sim);
-    let out = dir.join("out");
-    navfuse_ok(&[
-        "run",
-        sim.join("run.toml").to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--outages",
-        "30/200@200",
-        "--smooth",
-        "-q",
-    ]);
+    let (dir, sim, out) = sim_and_run(
+        "report-sim",
+        "scenarios/seed002_car.toml",
+        &["--outages", "30/200@200", "--smooth"],
+    );
     let page = dir.join("sim_report.html");
     navfuse_ok(&[
         "report",

@@ -62,6 +62,23 @@ pub fn run_demo(name: &str, extra: &[&str]) -> (PathBuf, PathBuf) {
     (dir, out)
 }
 
+/// Simulate `scenario` into `tmp(name)/sim` and run its run.toml into
+/// `tmp(name)/out` with `extra` run arguments; returns (scratch, sim, out).
+pub fn sim_and_run(name: &str, scenario: &str, extra: &[&str]) -> (PathBuf, PathBuf, PathBuf) {
+    let dir = tmp(name);
+    let sim = dir.join("sim");
+    simulate(Path::new(scenario), &sim);
+    let out = dir.join("out");
+    let (cfg, o) = (
+        sim.join("run.toml").to_str().unwrap().to_string(),
+        out.to_str().unwrap().to_string(),
+    );
+    let mut args = vec!["run", &cfg, "--out", &o, "-q"];
+    args.extend_from_slice(extra);
+    navfuse_ok(&args);
+    (dir, sim, out)
+}
+
 /// `navfuse sim SCENARIO --out OUT -q` (scenario relative to the repository root or
 /// absolute).
 pub fn simulate(scenario: &Path, out: &Path) {
