@@ -38,32 +38,72 @@ pub struct FileSink {
     separation: Option<SeparationWriter>,
     /// states.csv (the forward run's extra states) and innovations.csv, created at
     /// their first row.
-    forward_states: Option<StatesThread>,
+    forward_states: Option<Threaded<StatesRow>>,
     innovations: Option<InnovationWriter>,
     /// Files created after `begin`, listed in the summary at the end.
     late_files: Vec<PathBuf>,
 }
 
-/// Record writers on their own thread, fed in batches.
-#[derive(Default)]
-struct Threaded {
-    batch: Vec<SolutionRecord>,
-    tx: Option<SyncSender<Vec<SolutionRecord>>>,
+/// Writers on their own thread, fed in batches of `T` (solution records; rows of
+/// states.csv).
+struct Threaded<T = SolutionRecord> {
+    batch: Vec<T>,
+    tx: Option<SyncSender<Vec<T>>>,
     writer: Option<JoinHandle<Result<(), InputError>>>,
 }
 
-impl Threaded {
+impl<T> Default for Threaded<T> {
+    fn default() -> Self {
+        Threaded {
+            batch: Vec::new(),
+            tx: None,
+            writer: None,
+        }
+    }
+}
+
+impl Threaded<SolutionRecord> {
     fn start(writers: Vec<Box<dyn RecordWriter>>) -> Self {
-        let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<SolutionRecord>>(8);
+        Self::spawn(move |rx| write_batches(writers, rx))
+    }
+}
+
+/// A row of states.csv: week, t, then the values and the 1-sigma.
+type StatesRow = (u32, f64, Vec<f64>);
+
+impl Threaded<StatesRow> {
+    fn start_states(mut w: StatesWriter) -> Self {
+        Self::spawn(move |rx| {
+            let mut failed = None;
+            'batches: for batch in rx {
+                for (week, t, v) in batch {
+                    let (values, std) = v.split_at(v.len() / 2);
+                    if let Err(e) = w.write(week, t, values, std) {
+                        failed = Some(e);
+                        break 'batches;
+                    }
+                }
+            }
+            let finished = w.finish();
+            failed.map_or(finished, Err)
+        })
+    }
+}
+
+impl<T: Send + 'static> Threaded<T> {
+    fn spawn(
+        work: impl FnOnce(std::sync::mpsc::Receiver<Vec<T>>) -> Result<(), InputError> + Send + 'static,
+    ) -> Self {
+        let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<T>>(8);
         Threaded {
             batch: Vec::with_capacity(BATCH),
             tx: Some(tx),
-            writer: Some(std::thread::spawn(move || write_batches(writers, rx))),
+            writer: Some(std::thread::spawn(move || work(rx))),
         }
     }
 
-    fn push(&mut self, record: &SolutionRecord) -> Result<(), Error> {
-        self.batch.push(*record);
+    fn push(&mut self, item: T) -> Result<(), Error> {
+        self.batch.push(item);
         if self.batch.len() == BATCH {
             self.send()?;
         }
@@ -227,17 +267,17 @@ impl SolutionSink for FileSink {
     }
 
     fn epoch(&mut self, record: &SolutionRecord) -> Result<(), Error> {
-        self.main.push(record)
+        self.main.push(*record)
     }
 
     fn states(&mut self, s: &StateValues) -> Result<(), Error> {
         if self.forward_states.is_none() {
             let p = self.dir.join("states.csv");
-            self.forward_states = Some(StatesThread::start(StatesWriter::create(&p, s.names)?));
+            self.forward_states = Some(Threaded::start_states(StatesWriter::create(&p, s.names)?));
             self.late_files.push(p);
         }
         match self.forward_states.as_mut() {
-            Some(w) => w.push(s),
+            Some(w) => w.push((s.gps_week, s.t, [s.values, s.std].concat())),
             None => Ok(()),
         }
     }
@@ -261,7 +301,7 @@ impl SolutionSink for FileSink {
         let states = self
             .forward_states
             .take()
-            .map_or(Ok(()), |w| w.end(&self.dir));
+            .map_or(Ok(()), |mut w| w.end(&self.dir));
         let innovations = self.innovations.take().map_or(Ok(()), |w| w.finish());
         main?;
         states?;
@@ -295,8 +335,8 @@ impl SolutionSink for FileSink {
     }
 
     fn smoothed(&mut self, epoch: &SmoothedEpoch) -> Result<(), Error> {
-        self.smoothed.push(&epoch.record)?;
-        self.smoothed_csv.push(&epoch.record)?;
+        self.smoothed.push(epoch.record)?;
+        self.smoothed_csv.push(epoch.record)?;
         if let Some(w) = self.states.as_mut() {
             let r = &epoch.record;
             w.write(r.gps_week, r.nav.t, &epoch.states, &epoch.states_std)?;
@@ -329,85 +369,6 @@ impl SolutionSink for FileSink {
     fn report(&mut self, job: &mut JobResult, progress: bool) -> Result<(), Error> {
         job.files.append(&mut self.late_files);
         write_reports(&self.dir, job, progress)
-    }
-}
-
-/// `states.csv` on a thread of its own, fed in batches of flat rows (week, t, the
-/// values, the 1-sigma): formatting it at the IMU rate costs a tenth of the run.
-struct StatesThread {
-    batch: Vec<f64>,
-    rows: usize,
-    tx: Option<SyncSender<Vec<f64>>>,
-    writer: Option<JoinHandle<Result<(), InputError>>>,
-}
-
-impl StatesThread {
-    fn start(mut w: StatesWriter) -> Self {
-        let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<f64>>(8);
-        let writer = std::thread::spawn(move || {
-            let mut failed = None;
-            'batches: for batch in rx {
-                let Some(&n) = batch.first() else { continue };
-                let n = n as usize;
-                for row in batch[1..].chunks_exact(2 + 2 * n) {
-                    let (values, std) = row[2..].split_at(n);
-                    if let Err(e) = w.write(row[0] as u32, row[1], values, std) {
-                        failed = Some(e);
-                        break 'batches;
-                    }
-                }
-            }
-            let finished = w.finish();
-            failed.map_or(finished, Err)
-        });
-        StatesThread {
-            batch: Vec::new(),
-            rows: 0,
-            tx: Some(tx),
-            writer: Some(writer),
-        }
-    }
-
-    fn push(&mut self, s: &StateValues) -> Result<(), Error> {
-        if self.batch.is_empty() {
-            self.batch.push(s.values.len() as f64);
-        }
-        self.batch.extend_from_slice(&[f64::from(s.gps_week), s.t]);
-        self.batch.extend_from_slice(s.values);
-        self.batch.extend_from_slice(s.std);
-        self.rows += 1;
-        if self.rows == BATCH {
-            self.send()?;
-        }
-        Ok(())
-    }
-
-    fn send(&mut self) -> Result<(), Error> {
-        self.rows = 0;
-        let full = std::mem::take(&mut self.batch);
-        match &self.tx {
-            Some(tx) => tx
-                .send(full)
-                .map_err(|_| Error::Other("the states.csv writer stopped".into())),
-            None => Ok(()),
-        }
-    }
-
-    fn end(mut self, dir: &Path) -> Result<(), Error> {
-        let sent = if self.batch.is_empty() {
-            Ok(())
-        } else {
-            self.send()
-        };
-        self.tx = None;
-        let Some(writer) = self.writer.take() else {
-            return sent;
-        };
-        writer
-            .join()
-            .map_err(|_| Error::Other("the states.csv writer panicked".into()))?
-            .with_context(|| format!("writing states.csv into {}", dir.display()))?;
-        sent
     }
 }
 
