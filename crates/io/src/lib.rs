@@ -19,5 +19,6 @@ pub mod rinex_obs;
 pub mod smoothed;
 pub mod time;
 pub mod timetag;
+pub mod trajectory;
 
 pub use error::InputError;
