@@ -185,9 +185,9 @@ impl RecordWriter for PosWriter {
         line.push(b' ');
         push_f(line, n.lla.z, 4);
         let sd = r.std.map_or([0.0; 3], |s| [s[0], s[1], s[2]]);
-        let _ = write!(
+        let _ = writeln!(
             line,
-            "   5   0 {:8.4} {:8.4} {:8.4} {:8.4} {:8.4} {:8.4} {:6.2} {:6.1}\n",
+            "   5   0 {:8.4} {:8.4} {:8.4} {:8.4} {:8.4} {:8.4} {:6.2} {:6.1}",
             sd[0], sd[1], sd[2], 0.0, 0.0, 0.0, 0.0, 0.0
         );
         self.out.put()
@@ -363,9 +363,9 @@ impl RecordWriter for MapWriter {
             }
             Map::Gpx => {
                 let (c, ms) = utc(r, 1000);
-                let _ = write!(
+                let _ = writeln!(
                     line,
-                    "<trkpt lat=\"{lat:.9}\" lon=\"{lon:.9}\"><ele>{h:.3}</ele><time>{:04}-{:02}-{:02}T{:02}:{:02}:{:02}.{ms:03}Z</time></trkpt>\n",
+                    "<trkpt lat=\"{lat:.9}\" lon=\"{lon:.9}\"><ele>{h:.3}</ele><time>{:04}-{:02}-{:02}T{:02}:{:02}:{:02}.{ms:03}Z</time></trkpt>",
                     c.year, c.month, c.day, c.hour, c.minute, c.second
                 );
             }
@@ -451,7 +451,7 @@ mod tests {
         // 243000.3 s GPST is 19:29:42.3 UTC (18 leap seconds in 2025).
         let (c, ms) = utc(&at(243_000.3), 1000);
         assert_eq!((c.hour, c.minute, c.second, ms), (19, 29, 42.0, 300));
-        let (c, cs) = utc(&at(243_077.9999), 100);
+        let (c, cs) = utc(&at(243_077.999_9), 100);
         assert_eq!((c.minute, c.second, cs), (31, 0.0, 0));
     }
 }
