@@ -405,8 +405,10 @@ pub fn read_solution_csv(path: &Path) -> Result<Vec<(u32, NavState)>, InputError
     read_nav_table(path, true)
 }
 
-/// True when `line` is [`CSV_NAV_HEADER`], alone or followed by more columns.
+/// True when `line` is [`CSV_NAV_HEADER`], alone or followed by more columns (after a
+/// UTF-8 byte-order mark, as spreadsheets save CSV).
 pub fn is_csv_nav_header(line: &[u8]) -> bool {
+    let line = line.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(line);
     line.strip_prefix(CSV_NAV_HEADER.as_bytes())
         .is_some_and(|rest| rest.is_empty() || rest[0] == b',')
 }

@@ -267,6 +267,8 @@ mod tests {
             ("b.nav", GNSS13, TrajFormat::KfGinsGnss),
             ("hdr.pos", "% program : x\n%\n", TrajFormat::Pos),
             ("c.nav", &format!("# a comment\n\n{NAV}"), TrajFormat::Nav),
+            ("bom.txt", &format!("\u{feff}{CSV}"), TrajFormat::Csv),
+            ("crlf.txt", &CSV.replace('\n', "\r\n"), TrajFormat::Csv),
         ] {
             let p = tmp(name, text);
             assert_eq!(detect_format(&p).unwrap(), want, "{name}");
@@ -279,6 +281,8 @@ mod tests {
         assert_eq!(nav.points.len(), 2);
         assert!(nav.points[0].rpy.is_some() && nav.points[0].v_n.is_some());
         let csv = read_trajectory(&tmp("c.txt", CSV), None, &[]).unwrap();
+        let bom = read_trajectory(&tmp("bom.csv", &format!("\u{feff}{CSV}")), None, &[]);
+        assert_eq!(bom.unwrap().points, csv.points);
         assert_eq!((csv.week, csv.points.len()), (2374, 2));
         // The same values as the .nav (the week aside).
         assert_eq!(csv.points[1].lla, nav.points[1].lla);
