@@ -2,52 +2,42 @@
 
 use anyhow::{bail, Context, Result};
 use nalgebra::Vector3;
-use navfuse_core::eval::{evaluate, EvalOptions, EvalReport, Stat, TrajPoint};
+use navfuse_core::eval::{evaluate, EvalOptions, EvalReport, Stat};
 use navfuse_core::outage::OutageSchedule;
 use navfuse_core::time::SECONDS_PER_WEEK as WEEK_S;
-use navfuse_experiments::track::{load_nav, Track};
-use navfuse_io::gnss::read_gnss;
-use navfuse_io::input::{GnssFormat, GnssSource};
+use navfuse_io::trajectory::{detect_format, read_trajectory, TrajFormat, Trajectory};
 use serde_json::{json, Value};
 use std::path::Path;
 
-fn load_pos(path: &Path, quality: Vec<u8>) -> Result<Track> {
-    let src = GnssSource {
-        path: path.to_path_buf(),
-        format: GnssFormat::RtklibPos { quality },
-        decimate_s: None,
-        time_offset_s: 0.0,
+/// The two files and how to read them.
+pub struct EvalInputs<'a> {
+    pub solution: &'a Path,
+    pub truth: &'a Path,
+    /// `--solution-format`, `--truth-format`: `auto` (by content) or a format name.
+    pub solution_format: &'a str,
+    pub truth_format: &'a str,
+    /// `--quality`, for a `.pos` truth (a `.pos` solution keeps every epoch).
+    pub quality: &'a str,
+}
+
+/// Read one side, its format detected by content unless `format` names it.
+fn load(path: &Path, format: &str, option: &str, quality: &[u8]) -> Result<Trajectory> {
+    let format = match TrajFormat::parse(format).map_err(|e| anyhow::anyhow!("{option}: {e}"))? {
+        Some(f) => f,
+        None => detect_format(path)
+            .with_context(|| format!("cannot tell the file's format ({option} names it)"))?,
     };
-    let g = read_gnss(&src)?;
-    let points = g
-        .fixes
-        .iter()
-        .map(|f| TrajPoint {
-            t: f.t,
-            lla: f.lla,
-            v_n: f.vel_ned,
-            rpy: None,
-        })
-        .collect();
-    Ok(Track {
-        week: g.gps_week.unwrap_or(0),
-        points,
-    })
-}
-
-fn is_pos(path: &Path) -> bool {
-    path.extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("pos"))
-}
-
-/// The reference trajectory in `path` (RTKLIB .pos with these qualities, else .nav).
-pub fn load_reference(path: &Path, quality: Vec<u8>) -> Result<Track> {
-    if is_pos(path) {
-        load_pos(path, quality)
-    } else {
-        load_nav(path)
+    let t = read_trajectory(path, Some(format), quality)?;
+    for w in &t.warnings {
+        eprintln!("navfuse: warning: {w}");
     }
+    Ok(t)
+}
+
+/// The reference trajectory in `path`, its format by content unless `format`
+/// (`--truth-format`) names it; `quality`: the RTKLIB .pos qualities kept.
+pub fn load_reference(path: &Path, format: &str, quality: &[u8]) -> Result<Trajectory> {
+    load(path, format, "--truth-format", quality)
 }
 
 /// `--quality Q,...`.
@@ -72,18 +62,17 @@ pub fn parse_vec3(s: &str) -> Result<Vector3<f64>> {
 }
 
 pub fn main(
-    solution: &Path,
-    truth: &Path,
+    inputs: &EvalInputs<'_>,
     gaps: Option<String>,
     lever_arm: Option<String>,
-    quality: &str,
     window: Option<String>,
     errors_csv: Option<&Path>,
     json_out: bool,
 ) -> Result<()> {
-    let sol = load_nav(solution)?;
-    let quality = parse_quality(quality)?;
-    let mut reference = load_reference(truth, quality)?;
+    let (solution, truth) = (inputs.solution, inputs.truth);
+    let quality = parse_quality(inputs.quality)?;
+    let sol = load(solution, inputs.solution_format, "--solution-format", &[])?;
+    let mut reference = load_reference(truth, inputs.truth_format, &quality)?;
     if sol.points.is_empty() {
         bail!("{}: no solution epochs", solution.display());
     }
@@ -114,7 +103,11 @@ pub fn main(
         ..Default::default()
     };
     if opts.lever_arm_b.is_some() && sol.points.iter().any(|p| p.rpy.is_none()) {
-        bail!("--lever-arm needs attitude in the solution");
+        bail!(
+            "--lever-arm needs attitude in the solution, and {} ({}) has none",
+            solution.display(),
+            sol.format.describe()
+        );
     }
     let rep = evaluate(&sol.points, &reference.points, &opts);
     if rep.epochs == 0 {
@@ -218,21 +211,28 @@ pub fn to_json(r: &EvalReport) -> Value {
             r.gaps
                 .iter()
                 .map(|g| {
-                    json!({
+                    let mut j = json!({
                         "start": g.start, "end": g.end, "epochs": g.epochs,
                         "max_horizontal_m": g.max_horizontal, "max_vertical_m": g.max_vertical,
-                        "max_3d_m": g.max_3d, "max_roll_deg": g.max_roll * d,
-                        "max_pitch_deg": g.max_pitch * d, "max_yaw_deg": g.max_yaw * d,
-                    })
+                        "max_3d_m": g.max_3d,
+                    });
+                    if r.att.is_some() {
+                        j["max_roll_deg"] = json!(g.max_roll * d);
+                        j["max_pitch_deg"] = json!(g.max_pitch * d);
+                        j["max_yaw_deg"] = json!(g.max_yaw * d);
+                    }
+                    j
                 })
                 .collect(),
         );
     }
     if let Some(g) = &r.gap_rms {
-        v["gap_max_rms"] = json!({
-            "horizontal_m": g[0], "vertical_m": g[1], "3d_m": g[2],
-            "roll_deg": g[3] * d, "pitch_deg": g[4] * d, "yaw_deg": g[5] * d,
-        });
+        v["gap_max_rms"] = json!({ "horizontal_m": g[0], "vertical_m": g[1], "3d_m": g[2] });
+        if r.att.is_some() {
+            v["gap_max_rms"]["roll_deg"] = json!(g[3] * d);
+            v["gap_max_rms"]["pitch_deg"] = json!(g[4] * d);
+            v["gap_max_rms"]["yaw_deg"] = json!(g[5] * d);
+        }
     }
     v
 }
@@ -281,9 +281,12 @@ pub fn to_text(r: &EvalReport) -> String {
         "percentiles [m]      P50 (CEP)      P68   P95 (R95)      P99\nhorizontal    {:>12.4}{:>9.4}{:>12.4}{:>9.4}\n3d            {:>12.4}{:>9.4}{:>12.4}{:>9.4}\n",
         h[0], h[1], h[2], h[3], p[0], p[1], p[2], p[3]
     ));
+    // Attitude columns only when attitude was scored (not against a reference
+    // without attitude, where they would read 0).
+    let att = r.att.is_some();
     if !r.gaps.is_empty() {
         s.push_str(&format!(
-            "outages: {}\n{:>14}{:>14}{:>8}{:>10}{:>10}{:>10}{:>10}\n",
+            "outages: {}\n{:>14}{:>14}{:>8}{:>10}{:>10}{:>10}{}\n",
             r.gaps.len(),
             "start",
             "end",
@@ -291,26 +294,33 @@ pub fn to_text(r: &EvalReport) -> String {
             "hor [m]",
             "ver [m]",
             "3d [m]",
-            "yaw [deg]"
+            if att { " yaw [deg]" } else { "" }
         ));
         for g in &r.gaps {
             s.push_str(&format!(
-                "{:>14.3}{:>14.3}{:>8}{:>10.3}{:>10.3}{:>10.3}{:>10.4}\n",
-                g.start,
-                g.end,
-                g.epochs,
-                g.max_horizontal,
-                g.max_vertical,
-                g.max_3d,
-                g.max_yaw * d
+                "{:>14.3}{:>14.3}{:>8}{:>10.3}{:>10.3}{:>10.3}",
+                g.start, g.end, g.epochs, g.max_horizontal, g.max_vertical, g.max_3d,
             ));
+            if att {
+                s.push_str(&format!("{:>10.4}", g.max_yaw * d));
+            }
+            s.push('\n');
         }
     }
     if let Some(g) = &r.gap_rms {
         s.push_str(&format!(
-            "RMS of per-outage maxima: horizontal {:.4} m, vertical {:.4} m, 3d {:.4} m, roll {:.4} deg, pitch {:.4} deg, yaw {:.4} deg\n",
-            g[0], g[1], g[2], g[3] * d, g[4] * d, g[5] * d
+            "RMS of per-outage maxima: horizontal {:.4} m, vertical {:.4} m, 3d {:.4} m",
+            g[0], g[1], g[2]
         ));
+        if att {
+            s.push_str(&format!(
+                ", roll {:.4} deg, pitch {:.4} deg, yaw {:.4} deg",
+                g[3] * d,
+                g[4] * d,
+                g[5] * d
+            ));
+        }
+        s.push('\n');
     }
     s
 }

@@ -125,20 +125,32 @@ enum Command {
     Report(report_cmd::ReportArgs),
     /// Score a solution against a reference trajectory.
     ///
-    /// SOLUTION is a KF-GINS .nav file; TRUTH is a .nav file (IMU-centre state with
-    /// attitude) or an RTKLIB .pos file (antenna positions; use --lever-arm to move the
-    /// solution to the antenna). Prints RMS, max and mean of N/E/D, horizontal,
-    /// vertical, 3D, along-track and cross-track position, velocity and attitude errors
-    /// (the rotation between the attitudes: roll/pitch/yaw components and the total
-    /// angle; none when the reference has no attitude), the P50/P68/P95/P99 of the
-    /// horizontal and 3D error (CEP = P50, R95 = P95 horizontal); with --gaps also each
-    /// outage's maximum error and the RMS of those maxima; --errors writes every
-    /// epoch's errors.
+    /// SOLUTION and TRUTH may each be a KF-GINS .nav file (11 columns; week 0 = seconds
+    /// of week only), navfuse's solution.csv / smoothed.csv, an RTKLIB .pos file (GPST,
+    /// lat/lon/height) or a KF-GINS GNSS text file (7 or 13 columns), recognised by
+    /// their content, not by the file name (--solution-format / --truth-format choose).
+    /// .nav and CSV are IMU-centre states with velocity and attitude; .pos and KF-GINS
+    /// GNSS are antenna positions (with velocity in their 24- / 13-column forms) and no
+    /// attitude: use --lever-arm to move the solution to the antenna. Prints RMS, max
+    /// and mean of N/E/D, horizontal, vertical, 3D, along-track and cross-track
+    /// position, velocity (when both files have it) and attitude errors (the rotation
+    /// between the attitudes: roll/pitch/yaw components and the total angle; only when
+    /// both files have attitude), the P50/P68/P95/P99 of the horizontal and 3D error
+    /// (CEP = P50, R95 = P95 horizontal); with --gaps also each outage's maximum error
+    /// and the RMS of those maxima; --errors writes every epoch's errors.
     Eval {
-        /// The solution: a KF-GINS .nav file (11 columns; week 0 = seconds of week only).
+        /// The solution: .nav, navfuse CSV, RTKLIB .pos or KF-GINS GNSS (by content).
         solution: PathBuf,
-        /// The reference: a .nav file, or an RTKLIB .pos file (recognised by the extension).
+        /// The reference: .nav, navfuse CSV, RTKLIB .pos or KF-GINS GNSS (by content).
         truth: PathBuf,
+        /// The solution's format: auto (by content), nav, csv, pos or kfgins-gnss.
+        #[arg(long, value_name = "FORMAT", default_value = "auto",
+              value_parser = ["auto", "nav", "csv", "pos", "kfgins-gnss"])]
+        solution_format: String,
+        /// The reference's format: auto (by content), nav, csv, pos or kfgins-gnss.
+        #[arg(long, value_name = "FORMAT", default_value = "auto",
+              value_parser = ["auto", "nav", "csv", "pos", "kfgins-gnss"])]
+        truth_format: String,
         /// Outage windows: comma-separated `a:b` and `L/P@T[..U]` (see `run --outages`).
         #[arg(long, value_name = "SPEC")]
         gaps: Option<String>,
@@ -146,7 +158,8 @@ enum Command {
         /// the antenna lever arm when TRUTH is an antenna track.
         #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
         lever_arm: Option<String>,
-        /// For an RTKLIB .pos truth: solution qualities to score against (default 1 = fix).
+        /// For an RTKLIB .pos truth: solution qualities to score against (default 1 = fix;
+        /// a .pos solution keeps every epoch).
         #[arg(long, value_name = "Q,...", default_value = "1")]
         quality: String,
         /// Only score reference epochs in [start, end] (seconds, same time base).
@@ -356,6 +369,8 @@ fn main() -> ExitCode {
         Command::Eval {
             solution,
             truth,
+            solution_format,
+            truth_format,
             gaps,
             lever_arm,
             quality,
@@ -363,11 +378,15 @@ fn main() -> ExitCode {
             errors,
             json,
         } => eval_cmd::main(
-            &solution,
-            &truth,
+            &eval_cmd::EvalInputs {
+                solution: &solution,
+                truth: &truth,
+                solution_format: &solution_format,
+                truth_format: &truth_format,
+                quality: &quality,
+            },
             gaps,
             lever_arm,
-            &quality,
             window,
             errors.as_deref(),
             json,

@@ -11,10 +11,13 @@ use std::time::Instant;
 pub struct ReportArgs {
     /// The output directory of `navfuse run`.
     pub run_dir: PathBuf,
-    /// A reference trajectory (as for `navfuse eval`): a .nav file or an RTKLIB
-    /// .pos file.
+    /// A reference trajectory, as for `navfuse eval`: a KF-GINS .nav, a navfuse
+    /// solution.csv, an RTKLIB .pos or a KF-GINS GNSS text file (by content).
     #[arg(long, value_name = "FILE")]
     pub truth: Option<PathBuf>,
+    /// The truth's format: auto (by content), nav, csv, pos, kfgins-gnss.
+    #[arg(long, value_name = "FORMAT", default_value = "auto")]
+    pub truth_format: String,
     /// Body-frame point [m] (F,R,D) to move the solution to before comparing
     /// (the antenna, when the truth is an antenna track).
     #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
@@ -43,7 +46,7 @@ pub fn main(a: ReportArgs) -> Result<()> {
     }
     let truth = match &a.truth {
         Some(p) => {
-            let track = load_reference(p, parse_quality(&a.quality)?)?;
+            let track = load_reference(p, &a.truth_format, &parse_quality(&a.quality)?)?;
             if track.points.is_empty() {
                 bail!("{}: no reference epochs", p.display());
             }

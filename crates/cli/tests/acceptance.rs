@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{eval_json, num as f, repo, shared, tmp};
+use common::{eval_json, navfuse_ok, num as f, repo, shared, tmp};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -280,15 +280,23 @@ fn bad_inputs_fail_cleanly() {
         ],
         &["--gaps"],
     );
-    // A solution file given in place of a truth file of the wrong kind names the line.
+    // A file read as the wrong kind names the line. (Detected by content, the same
+    // swap is a valid evaluation: the .pos track scored against the solution.)
     check(
         &[
             "eval",
             demo.join("gnss.pos").to_str().unwrap(),
             sol.to_str().unwrap(),
+            "--solution-format",
+            "nav",
         ],
         &["gnss.pos:2", "11 columns"],
     );
+    navfuse_ok(&[
+        "eval",
+        demo.join("gnss.pos").to_str().unwrap(),
+        sol.to_str().unwrap(),
+    ]);
     let _ = std::fs::remove_dir_all(&dir);
 }
 

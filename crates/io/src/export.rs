@@ -4,8 +4,8 @@
 //! [`RecordWriter`], so `navfuse run` writes them beside solution.nav (`\[output\]
 //! formats`, `--formats`) and `navfuse export` from a finished run.
 //!
-//! The map formats and NMEA take at most one epoch per [`MAP_PERIOD_S`] (a 200 Hz
-//! track is too dense for a map or a serial log); `.pos` takes every epoch.
+//! The map formats and NMEA take the first epoch of each [`MAP_PERIOD_S`] of GPS time
+//! (a 200 Hz track is too dense for a map or a serial log); `.pos` takes every epoch.
 
 use crate::error::InputError;
 use crate::fmt::push_fixed9;
@@ -17,7 +17,7 @@ use navfuse_core::SolutionState;
 use std::io::Write as _;
 use std::path::Path;
 
-/// Smallest interval between two epochs of the map and NMEA exports \[s\].
+/// The map and NMEA exports take one epoch per this interval of GPS time \[s\].
 pub const MAP_PERIOD_S: f64 = 0.1;
 
 /// An export format (`\[output\] formats`, `--formats`).
@@ -118,27 +118,26 @@ fn push_f(line: &mut Vec<u8>, v: f64, decimals: usize) {
     let _ = write!(line, "{v:.decimals$}");
 }
 
-/// Decimation of the map and NMEA exports.
+/// Decimation of the map and NMEA exports: the first epoch in each [`MAP_PERIOD_S`]
+/// interval of GPS time (the rule of `output.rate_hz`, with its 1 µs tolerance), so
+/// at most 10 Hz, regular at any IMU rate, and a 10 Hz solution whose time tags jitter
+/// within their intervals is kept whole.
 #[derive(Default)]
 struct Every {
-    last: Option<f64>,
+    last: Option<i64>,
 }
 
 impl Every {
-    fn due(&mut self, t_abs: f64) -> bool {
-        match self.last {
-            // 5 % slack: time tags jitter around a 10 Hz output.
-            Some(l) if t_abs - l < 0.95 * MAP_PERIOD_S => false,
-            _ => {
-                self.last = Some(t_abs);
-                true
-            }
+    fn due(&mut self, r: &SolutionRecord) -> bool {
+        let per_week = (navfuse_core::time::SECONDS_PER_WEEK / MAP_PERIOD_S).round() as i64;
+        let bin =
+            i64::from(r.gps_week) * per_week + ((r.nav.t + 1e-6) / MAP_PERIOD_S).floor() as i64;
+        if self.last.is_some_and(|l| bin <= l) {
+            return false;
         }
+        self.last = Some(bin);
+        true
     }
-}
-
-fn abs_time(r: &SolutionRecord) -> f64 {
-    f64::from(r.gps_week) * navfuse_core::time::SECONDS_PER_WEEK + r.nav.t
 }
 
 /// RTKLIB solution file: GPST date and time, latitude, longitude \[deg\], ellipsoidal
@@ -187,9 +186,9 @@ impl RecordWriter for PosWriter {
         line.push(b' ');
         push_f(line, n.lla.z, 4);
         let sd = r.std.map_or([0.0; 3], |s| [s[0], s[1], s[2]]);
-        let _ = write!(
+        let _ = writeln!(
             line,
-            "   5   0 {:8.4} {:8.4} {:8.4} {:8.4} {:8.4} {:8.4} {:6.2} {:6.1}\n",
+            "   5   0 {:8.4} {:8.4} {:8.4} {:8.4} {:8.4} {:8.4} {:6.2} {:6.1}",
             sd[0], sd[1], sd[2], 0.0, 0.0, 0.0, 0.0, 0.0
         );
         self.out.put()
@@ -208,10 +207,14 @@ pub fn nmea_sentence(body: &str) -> String {
     format!("${body}*{cs:02X}\r\n")
 }
 
-/// UTC calendar of a GPS time (GPS week, seconds of week).
-fn utc(r: &SolutionRecord) -> crate::time::Calendar {
+/// UTC of a GPS time (GPS week, seconds of week) to the nearest `1 / per_s` s: the
+/// calendar of its whole second and the fraction in those units. Rounding the time
+/// first (not the calendar's float seconds) prints 42.3 s as `42.30`, not `42.29`.
+fn utc(r: &SolutionRecord, per_s: i64) -> (crate::time::Calendar, i64) {
     let leap = leap_seconds(Some(r.gps_week));
-    week_sow_to_calendar(r.gps_week, r.nav.t - leap)
+    let ticks = ((r.nav.t - leap) * per_s as f64).round() as i64;
+    let c = week_sow_to_calendar(r.gps_week, ticks.div_euclid(per_s) as f64);
+    (c, ticks.rem_euclid(per_s))
 }
 
 /// Degrees as NMEA `ddmm.mmmmmm` / `dddmm.mmmmmm` with the hemisphere letter.
@@ -238,7 +241,7 @@ fn nmea_angle(deg: f64, lon: bool) -> (String, char) {
 }
 
 /// NMEA 0183: GGA (fix quality 1; 6 = dead reckoning while the integrity monitor
-/// holds GNSS out), RMC, HDT per epoch (at most one per [`MAP_PERIOD_S`]), UTC from
+/// holds GNSS out), RMC, HDT per epoch (one per [`MAP_PERIOD_S`], see [`Every`]), UTC from
 /// GPS time with the leap seconds of the epoch's week. The GGA altitude field holds
 /// the ellipsoidal height with a geoid separation of 0 (no geoid model here).
 pub struct NmeaWriter {
@@ -257,16 +260,11 @@ impl NmeaWriter {
 
 impl RecordWriter for NmeaWriter {
     fn write_record(&mut self, r: &SolutionRecord) -> Result<(), InputError> {
-        if !self.every.due(abs_time(r)) {
+        if !self.every.due(r) {
             return Ok(());
         }
-        let c = utc(r);
-        let hms = format!(
-            "{:02}{:02}{:05.2}",
-            c.hour,
-            c.minute,
-            (c.second * 100.0).floor() / 100.0
-        );
+        let (c, cs) = utc(r, 100);
+        let hms = format!("{:02}{:02}{:02}.{cs:02}", c.hour, c.minute, c.second);
         let date = format!("{:02}{:02}{:02}", c.day, c.month, c.year.rem_euclid(100));
         let n = &r.nav;
         let (lat, ns) = nmea_angle(n.lla.x.to_degrees(), false);
@@ -354,7 +352,7 @@ impl MapWriter {
 
 impl RecordWriter for MapWriter {
     fn write_record(&mut self, r: &SolutionRecord) -> Result<(), InputError> {
-        if !self.every.due(abs_time(r)) {
+        if !self.every.due(r) {
             return Ok(());
         }
         let n = &r.nav;
@@ -374,11 +372,11 @@ impl RecordWriter for MapWriter {
                 line.push(b']');
             }
             Map::Gpx => {
-                let c = utc(r);
-                let _ = write!(
+                let (c, ms) = utc(r, 1000);
+                let _ = writeln!(
                     line,
-                    "<trkpt lat=\"{lat:.9}\" lon=\"{lon:.9}\"><ele>{h:.3}</ele><time>{:04}-{:02}-{:02}T{:02}:{:02}:{:06.3}Z</time></trkpt>\n",
-                    c.year, c.month, c.day, c.hour, c.minute, (c.second * 1000.0).floor() / 1000.0
+                    "<trkpt lat=\"{lat:.9}\" lon=\"{lon:.9}\"><ele>{h:.3}</ele><time>{:04}-{:02}-{:02}T{:02}:{:02}:{:02}.{ms:03}Z</time></trkpt>",
+                    c.year, c.month, c.day, c.hour, c.minute, c.second
                 );
             }
         }
@@ -419,5 +417,51 @@ mod tests {
                 == vec![ExportFormat::Kml, ExportFormat::Pos]
         );
         assert!(ExportFormat::parse_list("shp").unwrap_err().contains("shp"));
+    }
+
+    fn at(t: f64) -> SolutionRecord {
+        SolutionRecord {
+            gps_week: 2374,
+            nav: navfuse_core::NavState {
+                t,
+                lla: nalgebra::Vector3::zeros(),
+                v_n: nalgebra::Vector3::zeros(),
+                q_bn: nalgebra::UnitQuaternion::identity(),
+            },
+            imu_errors: Default::default(),
+            std: None,
+            gnss_integrity: None,
+        }
+    }
+
+    #[test]
+    fn decimation_is_one_epoch_per_tenth_of_a_second() {
+        // 200 Hz: every 20th epoch, 10 Hz exactly (the 0.095 s rule it replaces gave
+        // 105 epochs in these 10 s, mostly 0.095 s apart).
+        let mut e = Every::default();
+        let kept: Vec<usize> = (0..2001)
+            .filter(|&k| e.due(&at(243_000.0 + k as f64 * 0.005)))
+            .collect();
+        assert_eq!(kept.len(), 101);
+        assert!(kept.iter().enumerate().all(|(i, &k)| k == 20 * i));
+        // A 10 Hz solution with 0-11 ms of jitter inside its intervals: all kept.
+        let mut e = Every::default();
+        let jitter = [0.002, 0.011, 0.0, 0.009, 0.001, 0.010];
+        assert!((0..600).all(|k| e.due(&at(243_000.0 + k as f64 * 0.1 + jitter[k % 6]))));
+        // Across the week boundary.
+        let mut e = Every::default();
+        assert!(e.due(&at(604_799.95)));
+        let mut r = at(0.0);
+        r.gps_week += 1;
+        assert!(e.due(&r) && !e.due(&at(604_799.99)));
+    }
+
+    #[test]
+    fn utc_rounds_the_time_not_the_calendar() {
+        // 243000.3 s GPST is 19:29:42.3 UTC (18 leap seconds in 2025).
+        let (c, ms) = utc(&at(243_000.3), 1000);
+        assert_eq!((c.hour, c.minute, c.second, ms), (19, 29, 42.0, 300));
+        let (c, cs) = utc(&at(243_077.999_9), 100);
+        assert_eq!((c.minute, c.second, cs), (31, 0.0, 0));
     }
 }

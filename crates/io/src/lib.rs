@@ -22,5 +22,6 @@ pub mod smoothed;
 pub mod table;
 pub mod time;
 pub mod timetag;
+pub mod trajectory;
 
 pub use error::InputError;

@@ -402,6 +402,27 @@ impl CsvWriter {
 /// non-negative integer, lat in [-90, 90], time (week * 604800 + t) strictly
 /// increasing. Attitude becomes q_bn via ZYX Euler angles.
 pub fn read_nav(path: &Path) -> Result<Vec<(u32, NavState)>, InputError> {
+    read_nav_table(path, false)
+}
+
+/// Read navfuse's own `solution.csv` / `smoothed.csv` ([`CsvWriter`]): the header row
+/// [`CSV_NAV_HEADER`] (more columns may follow it: std, integrity), then the `.nav`
+/// values comma-separated; the columns after the 11th are not read. Same checks as
+/// [`read_nav`].
+pub fn read_solution_csv(path: &Path) -> Result<Vec<(u32, NavState)>, InputError> {
+    read_nav_table(path, true)
+}
+
+/// True when `line` is [`CSV_NAV_HEADER`], alone or followed by more columns (after a
+/// UTF-8 byte-order mark, as spreadsheets save CSV).
+pub fn is_csv_nav_header(line: &[u8]) -> bool {
+    let line = line.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(line);
+    line.strip_prefix(CSV_NAV_HEADER.as_bytes())
+        .is_some_and(|rest| rest.is_empty() || rest[0] == b',')
+}
+
+/// The `.nav` values, 11 columns (`csv`: after the CSV header, 11 or more columns).
+fn read_nav_table(path: &Path, csv: bool) -> Result<Vec<(u32, NavState)>, InputError> {
     const NAMES: [&str; 11] = [
         "week", "t", "lat", "lon", "h", "vn", "ve", "vd", "roll", "pitch", "yaw",
     ];
@@ -409,16 +430,31 @@ pub fn read_nav(path: &Path) -> Result<Vec<(u32, NavState)>, InputError> {
     let mut fields = Vec::with_capacity(16);
     let mut out = Vec::new();
     let mut prev: Option<f64> = None;
+    let mut need_header = csv;
     while let Some((ln, text)) = lines.next_line()? {
         split_fields(text, &mut fields);
         if is_comment_line(text, &fields) {
             continue;
         }
-        if fields.len() != 11 {
+        if need_header {
+            if !is_csv_nav_header(text) {
+                return Err(InputError::at_line(
+                    path,
+                    ln,
+                    format!(
+                        "expected the navfuse CSV header \"{CSV_NAV_HEADER}\", found \"{}\"",
+                        crate::error::shorten(text)
+                    ),
+                ));
+            }
+            need_header = false;
+            continue;
+        }
+        if fields.len() != 11 && !(csv && fields.len() > 11) {
             return Err(InputError::columns(
                 path,
                 ln,
-                11,
+                if csv { "11 or more" } else { "11" },
                 "week, t, lat lon h, vN vE vD, roll pitch yaw",
                 fields.len(),
             ));
