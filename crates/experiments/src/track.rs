@@ -3,12 +3,11 @@
 
 use anyhow::Result;
 use navfuse_app::SolutionRecord;
-use navfuse_core::attitude::euler_from_q_bn;
 use navfuse_core::eval::TrajPoint;
-use navfuse_core::time::SECONDS_PER_WEEK;
 use navfuse_core::NavState;
 use navfuse_io::nav::read_nav;
 use navfuse_io::nav_written::nav_as_written;
+use navfuse_io::trajectory::points_of_rows;
 use std::path::Path;
 
 /// A trajectory with its GPS week (0 = unknown, times are seconds of week).
@@ -20,16 +19,7 @@ pub struct Track {
 impl Track {
     /// Rows of (GPS week, state); times count from the first row's week.
     fn of_rows(rows: impl IntoIterator<Item = (u32, NavState)>) -> Track {
-        let mut rows = rows.into_iter().peekable();
-        let week = rows.peek().map_or(0, |r| r.0);
-        let points = rows
-            .map(|(w, s)| TrajPoint {
-                t: s.t + (w as f64 - week as f64) * SECONDS_PER_WEEK,
-                lla: s.lla,
-                v_n: Some(s.v_n),
-                rpy: Some(euler_from_q_bn(&s.q_bn)),
-            })
-            .collect();
+        let (week, points) = points_of_rows(rows.into_iter().collect());
         Track { week, points }
     }
 }

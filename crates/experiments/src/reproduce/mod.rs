@@ -76,15 +76,7 @@ pub(crate) fn gnss_only_track(cfg: &RunConfig) -> Result<Vec<TrajPoint>> {
         bail!("the GNSS-only variant needs a RINEX input");
     };
     let g = navfuse_app::gnss_input::load_rinex(src, r)?;
-    Ok(g.fixes
-        .iter()
-        .map(|f| TrajPoint {
-            t: f.t,
-            lla: f.lla,
-            v_n: f.vel_ned,
-            rpy: None,
-        })
-        .collect())
+    Ok(navfuse_io::trajectory::points_of_fixes(&g.fixes))
 }
 
 /// Per variant, per seed: the metrics.
