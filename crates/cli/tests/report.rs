@@ -240,6 +240,12 @@ fn report_of_a_simulated_run_with_truth() {
         );
     }
     assert!(html.contains("Smoothed solution against the truth"));
+    // The simulator's run writes std.txt: the errors have their sigma bands.
+    assert_eq!(
+        html.matches("+-3 sigma (std.txt)").count(),
+        6,
+        "N, E, D, roll, pitch, yaw"
+    );
     // No solution.csv in this run: the state comes from innovations.csv, and says so.
     assert!(!out.join("solution.csv").exists());
     assert!(html.contains("derived from innovations.csv"));

@@ -431,6 +431,7 @@ mod tests {
             imu_errors: Default::default(),
             std: None,
             gnss_integrity: None,
+            state: None,
         }
     }
 

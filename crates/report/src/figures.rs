@@ -3,7 +3,7 @@
 
 use crate::chart::{palette, Band, Chart, Colour, Series, Style};
 use crate::decimate::{by_distance, min_max};
-use crate::run_dir::{Epoch, RunData, StateTable};
+use crate::run_dir::{sigma_at, Epoch, RunData, Sigma, StateTable};
 use crate::{Error, Figure, Report, Table, Truth, SCORED_EPOCHS};
 use nalgebra::Vector3;
 use navfuse_core::earth::lla_diff_ned;
@@ -418,17 +418,6 @@ fn score(epochs: &[Epoch], truth: &Truth, gaps: Vec<Window>) -> EvalReport {
     )
 }
 
-/// The solution epoch nearest to `t` (epochs sorted).
-fn nearest(epochs: &[Epoch], t: f64) -> &Epoch {
-    let i = epochs.partition_point(|e| e.t < t);
-    match (epochs.get(i.wrapping_sub(1)), epochs.get(i)) {
-        (Some(a), Some(b)) if (t - a.t) < (b.t - t) => a,
-        (_, Some(b)) => b,
-        (Some(a), None) => a,
-        (None, None) => unreachable!("epochs are never empty"),
-    }
-}
-
 fn errors(
     c: &mut Ctx,
     truth: &Truth,
@@ -456,8 +445,7 @@ fn errors(
         truth.path.display(),
         if k > 1 { format!(" (one in {k})") } else { String::new() }
     ));
-    stats_table(c, &rep, "Errors against the truth");
-    let sol = &c.run.solution;
+    stats_table(c, &rep, "Errors against the truth", "Errors");
     let t0 = c.t0;
     let e = &rep.per_epoch;
     // Position errors with +-3 sigma of the solution's std.
@@ -471,11 +459,14 @@ fn errors(
                 palette(k),
                 min_max(&err, BUCKETS),
             ));
-        band(&mut chart, e, sol, t0, |s| s[k], 1.0);
+        let banded = band(&mut chart, e, &c.run.sigma, t0, |s| s[k], 1.0);
         c.push(
             &format!("error_{axis}"),
             "Errors",
-            format!("Solution minus truth, {axis} [m], with the filter's +-3 sigma"),
+            format!(
+                "Solution minus truth, {axis} [m]{}",
+                sigma_note(banded, c.run.sigma_file)
+            ),
             &chart,
         )?;
     }
@@ -511,10 +502,10 @@ fn errors(
                     palette(k),
                     min_max(&a, BUCKETS),
                 ));
-            band(
+            let banded = band(
                 &mut chart,
                 e,
-                sol,
+                &c.run.sigma,
                 t0,
                 |s| s[6 + k],
                 180.0 / std::f64::consts::PI,
@@ -522,7 +513,10 @@ fn errors(
             c.push(
                 &format!("error_{axis}"),
                 "Errors",
-                format!("Attitude error about the body {axis} axis (the rotation between solution and truth) [deg], with +-3 sigma"),
+                format!(
+                    "Attitude error about the body {axis} axis (the rotation between solution and truth) [deg]{}",
+                    sigma_note(banded, c.run.sigma_file)
+                ),
                 &chart,
             )?;
         }
@@ -532,35 +526,40 @@ fn errors(
     Ok(())
 }
 
-/// +-3 sigma of the solution epoch nearest each error epoch.
+fn sigma_note(banded: bool, file: Option<&str>) -> String {
+    match (banded, file) {
+        (true, Some(f)) => format!(", with the filter's +-3 sigma ({f})"),
+        _ => " (no std.txt or std columns in solution.csv: no sigma band)".into(),
+    }
+}
+
+/// +-3 sigma of the filter at each error epoch (nearest sigma row); false when the
+/// run has no sigma.
 fn band(
     chart: &mut Chart,
     e: &[EpochError],
-    sol: &[Epoch],
+    sigma: &[Sigma],
     t0: f64,
-    sigma: impl Fn(&[f64; 9]) -> f64,
+    pick: impl Fn(&[f64; 9]) -> f64,
     scale: f64,
-) {
+) -> bool {
+    if sigma.is_empty() {
+        return false;
+    }
     let pts: Vec<(f64, f64)> = e
         .iter()
-        .filter_map(|x| {
-            nearest(sol, x.t)
-                .std
-                .map(|s| (x.t - t0, 3.0 * sigma(&s) * scale))
-        })
+        .map(|x| (x.t - t0, 3.0 * pick(&sigma_at(sigma, x.t).nav) * scale))
         .collect();
-    if pts.is_empty() {
-        return;
-    }
     let upper = min_max(&pts, BUCKETS);
     chart.bands.push(Band {
         name: "+-3 sigma".into(),
         colour: GREY,
         points: upper.iter().map(|&(t, s)| (t, -s, s)).collect(),
     });
+    true
 }
 
-fn stats_table(c: &mut Ctx, rep: &EvalReport, caption: &str) {
+fn stats_table(c: &mut Ctx, rep: &EvalReport, caption: &str, section: &'static str) {
     let row = |name: &str, s: &navfuse_core::eval::Stat, unit: &str, scale: f64| {
         vec![
             format!("{name} [{unit}]"),
@@ -587,7 +586,7 @@ fn stats_table(c: &mut Ctx, rep: &EvalReport, caption: &str) {
         rows.push(row("attitude total", t, "deg", d));
     }
     c.tables.push(Table {
-        section: "Errors",
+        section,
         caption: format!("{caption}: {} epochs", rep.epochs),
         header: ["error", "RMS", "mean", "max"].map(String::from).to_vec(),
         rows,
@@ -811,8 +810,8 @@ fn imu_errors(c: &mut Ctx) -> Result<(), Error> {
     .enumerate()
     {
         let mut chart = c.chart(name, unit);
-        let sol = &c.run.solution;
-        let with_std = sol.iter().any(|e| e.std_imu.is_some());
+        let sigma = &c.run.sigma;
+        let with_std = sigma.iter().any(|s| s.imu.is_some());
         for (j, axis) in ["x", "y", "z"].iter().enumerate() {
             let i = 3 * k + j;
             let pts: Vec<(f64, f64)> = c.run.imu_err.iter().map(|(t, v)| (t - t0, v[i])).collect();
@@ -827,7 +826,7 @@ fn imu_errors(c: &mut Ctx) -> Result<(), Error> {
                     .iter()
                     .step_by(step)
                     .filter_map(|(t, v)| {
-                        let s = nearest(sol, *t).std_imu?[i];
+                        let s = sigma_at(sigma, *t).imu?[i];
                         Some((t - t0, v[i] - s, v[i] + s))
                     })
                     .collect();
@@ -843,10 +842,9 @@ fn imu_errors(c: &mut Ctx) -> Result<(), Error> {
             "IMU errors",
             format!(
                 "{name} estimate (imu_err.txt) [{unit}]{}",
-                if with_std {
-                    ", with +-1 sigma (solution.csv)"
-                } else {
-                    ""
+                match (with_std, c.run.sigma_file) {
+                    (true, Some(f)) => format!(", with +-1 sigma ({f})"),
+                    _ => String::new(),
                 }
             ),
             &chart,
@@ -1074,7 +1072,7 @@ fn smoother(c: &mut Ctx, truth: Option<&Truth>) -> Result<(), Error> {
         let fwd = score(&run.solution, truth, Vec::new());
         let smo = score(sm, truth, Vec::new());
         if smo.epochs > 0 {
-            stats_table(c, &smo, "Smoothed solution against the truth");
+            stats_table(c, &smo, "Smoothed solution against the truth", "Smoother");
             let t0 = c.t0;
             let h = |r: &EvalReport| -> Vec<(f64, f64)> {
                 min_max(

@@ -33,6 +33,26 @@ pub struct Epoch {
     pub plotted: bool,
 }
 
+/// The filter's 1-sigma at one epoch: position N E D \[m\], velocity N E D [m/s],
+/// roll pitch yaw \[rad\]; the IMU errors in imu_err.txt's units (deg/h, mGal, ppm).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sigma {
+    pub t: f64,
+    pub nav: [f64; 9],
+    pub imu: Option<[f64; 12]>,
+}
+
+/// The sigma nearest `t` (`sigma` sorted by time, not empty).
+pub fn sigma_at(sigma: &[Sigma], t: f64) -> &Sigma {
+    let i = sigma.partition_point(|s| s.t < t);
+    match (i.checked_sub(1).and_then(|j| sigma.get(j)), sigma.get(i)) {
+        (Some(a), Some(b)) if (t - a.t) < (b.t - t) => a,
+        (_, Some(b)) => b,
+        (Some(a), None) => a,
+        (None, None) => &sigma[0],
+    }
+}
+
 /// The extra states of `states.csv` / `smoothed_states.csv`.
 #[derive(Clone, Debug, Default)]
 pub struct StateTable {
@@ -136,6 +156,10 @@ pub struct RunData {
     pub solution_rows: usize,
     pub stride: usize,
     pub smoothed: Option<Vec<Epoch>>,
+    /// The forward filter's 1-sigma (from solution.csv, else std.txt), thinned as the
+    /// solution; and where it came from.
+    pub sigma: Vec<Sigma>,
+    pub sigma_file: Option<&'static str>,
     /// (t, 12 IMU error values in KF-GINS units: gyro bias deg/h, accel bias mGal,
     /// gyro scale ppm, accel scale ppm).
     pub imu_err: Vec<(f64, [f64; 12])>,
@@ -519,6 +543,48 @@ fn read_separation(path: &Path) -> Result<Vec<SeparationRow>, Error> {
         .collect())
 }
 
+/// The KF-GINS STD file (t and 21 columns: position, velocity, attitude [deg], then
+/// the IMU errors), every `stride`-th row.
+fn read_std_txt(path: &Path, stride: usize) -> Result<Vec<Sigma>, Error> {
+    if !path.is_file() {
+        return Ok(Vec::new());
+    }
+    let mut out = Vec::new();
+    let mut kept = 0usize;
+    for r in lines(path)? {
+        let (no, line) = r?;
+        if line.trim().is_empty() || line.starts_with('#') {
+            continue;
+        }
+        kept += 1;
+        if !(kept - 1).is_multiple_of(stride) {
+            continue;
+        }
+        let v: Vec<&str> = line.split_whitespace().collect();
+        if v.len() != 22 {
+            return Err(Error::new(format!(
+                "{}:{no}: {} columns; expected 22 (t and the 21 standard deviations)",
+                path.display(),
+                v.len()
+            )));
+        }
+        let mut x = [0.0; 22];
+        for (k, f) in v.iter().enumerate() {
+            x[k] = parse(path, no, "std", f)?;
+        }
+        let mut nav: [f64; 9] = std::array::from_fn(|k| x[1 + k]);
+        for a in &mut nav[6..] {
+            *a = a.to_radians();
+        }
+        out.push(Sigma {
+            t: x[0],
+            nav,
+            imu: Some(std::array::from_fn(|k| x[10 + k])),
+        });
+    }
+    Ok(out)
+}
+
 fn read_imu_err(path: &Path, stride: usize) -> Result<Vec<(f64, [f64; 12])>, Error> {
     if !path.is_file() {
         return Ok(Vec::new());
@@ -665,6 +731,24 @@ pub fn read_run(dir: &Path, score_t: &[f64]) -> Result<RunData, Error> {
             e.state = Some(aided.state_at(e.t, w));
         }
     }
+    let from_csv: Vec<Sigma> = solution
+        .iter()
+        .filter(|e| e.plotted)
+        .filter_map(|e| {
+            Some(Sigma {
+                t: e.t,
+                nav: e.std?,
+                imu: e.std_imu,
+            })
+        })
+        .collect();
+    let (sigma, sigma_file) = if !from_csv.is_empty() {
+        (from_csv, Some("solution.csv"))
+    } else {
+        let s = read_std_txt(&dir.join("std.txt"), stride)?;
+        let f = (!s.is_empty()).then_some("std.txt");
+        (s, f)
+    };
     let summary = match std::fs::read_to_string(dir.join("summary.json")) {
         Ok(s) => Some(serde_json::from_str(&s).map_err(|e| {
             Error::new(format!(
@@ -683,6 +767,8 @@ pub fn read_run(dir: &Path, score_t: &[f64]) -> Result<RunData, Error> {
         solution_rows: rows,
         stride,
         smoothed,
+        sigma,
+        sigma_file,
         imu_err: read_imu_err(&dir.join("imu_err.txt"), stride)?,
         states: read_states(&dir.join("states.csv"), stride)?,
         smoothed_states: read_states(&dir.join("smoothed_states.csv"), stride)?,

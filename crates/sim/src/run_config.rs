@@ -241,9 +241,10 @@ pub fn run_config(sc: &Scenario, dir: &Path) -> RunConfig {
         gnss,
         odometer,
         heading,
+        // The 1-sigma (std.txt) for consistency checks and the report's bands.
         output: OutputSpec {
             imu_err: false,
-            std: false,
+            std: true,
             ..OutputSpec::default()
         },
         source_path: dir.join("run.toml"),
