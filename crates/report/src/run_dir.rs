@@ -543,9 +543,13 @@ fn read_separation(path: &Path) -> Result<Vec<SeparationRow>, Error> {
         .collect())
 }
 
-/// The KF-GINS STD file (t and 21 columns: position, velocity, attitude [deg], then
-/// the IMU errors), every `stride`-th row.
-fn read_std_txt(path: &Path, stride: usize) -> Result<Vec<Sigma>, Error> {
+/// A whitespace table of `N` numeric columns (KF-GINS STD, IMU_ERR), every
+/// `stride`-th row; `what` names the columns for the error.
+fn read_columns<const N: usize>(
+    path: &Path,
+    stride: usize,
+    what: &str,
+) -> Result<Vec<[f64; N]>, Error> {
     if !path.is_file() {
         return Ok(Vec::new());
     }
@@ -561,61 +565,49 @@ fn read_std_txt(path: &Path, stride: usize) -> Result<Vec<Sigma>, Error> {
             continue;
         }
         let v: Vec<&str> = line.split_whitespace().collect();
-        if v.len() != 22 {
+        if v.len() != N {
             return Err(Error::new(format!(
-                "{}:{no}: {} columns; expected 22 (t and the 21 standard deviations)",
+                "{}:{no}: {} columns; expected {N} ({what})",
                 path.display(),
                 v.len()
             )));
         }
-        let mut x = [0.0; 22];
+        let mut x = [0.0; N];
         for (k, f) in v.iter().enumerate() {
-            x[k] = parse(path, no, "std", f)?;
+            x[k] = parse(path, no, what, f)?;
         }
-        let mut nav: [f64; 9] = std::array::from_fn(|k| x[1 + k]);
-        for a in &mut nav[6..] {
-            *a = a.to_radians();
-        }
-        out.push(Sigma {
-            t: x[0],
-            nav,
-            imu: Some(std::array::from_fn(|k| x[10 + k])),
-        });
+        out.push(x);
     }
     Ok(out)
 }
 
+/// The KF-GINS STD file (t and 21 columns: position, velocity, attitude [deg], then
+/// the IMU errors).
+fn read_std_txt(path: &Path, stride: usize) -> Result<Vec<Sigma>, Error> {
+    let rows = read_columns::<22>(path, stride, "t and the 21 standard deviations")?;
+    Ok(rows
+        .into_iter()
+        .map(|x| {
+            let mut nav: [f64; 9] = std::array::from_fn(|k| x[1 + k]);
+            for a in &mut nav[6..] {
+                *a = a.to_radians();
+            }
+            Sigma {
+                t: x[0],
+                nav,
+                imu: Some(std::array::from_fn(|k| x[10 + k])),
+            }
+        })
+        .collect())
+}
+
+/// imu_err.txt: (t, the 12 IMU errors).
 fn read_imu_err(path: &Path, stride: usize) -> Result<Vec<(f64, [f64; 12])>, Error> {
-    if !path.is_file() {
-        return Ok(Vec::new());
-    }
-    let mut out = Vec::new();
-    let mut kept = 0usize;
-    for r in lines(path)? {
-        let (no, line) = r?;
-        if line.trim().is_empty() || line.starts_with('#') {
-            continue;
-        }
-        kept += 1;
-        if !(kept - 1).is_multiple_of(stride) {
-            continue;
-        }
-        let v: Vec<&str> = line.split_whitespace().collect();
-        if v.len() != 13 {
-            return Err(Error::new(format!(
-                "{}:{no}: {} columns; expected 13 (t and the 12 IMU errors)",
-                path.display(),
-                v.len()
-            )));
-        }
-        let t = parse(path, no, "t", v[0])?;
-        let mut e = [0.0; 12];
-        for k in 0..12 {
-            e[k] = parse(path, no, "imu error", v[k + 1])?;
-        }
-        out.push((t, e));
-    }
-    Ok(out)
+    let rows = read_columns::<13>(path, stride, "t and the 12 IMU errors")?;
+    Ok(rows
+        .into_iter()
+        .map(|x| (x[0], std::array::from_fn(|k| x[1 + k])))
+        .collect())
 }
 
 /// Read innovations.csv streaming: per source, per `bucket_s`, the applied update
