@@ -205,6 +205,61 @@ fn report_of_the_demo_drive_with_an_outage_and_smoothing() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// The full real drive (../shared) with 30 s outages every 90 s, NHC and the
+/// smoother, against the receiver's RTK track.
+#[test]
+fn report_of_the_real_drive_with_outages() {
+    let Some(data) = common::shared() else {
+        return;
+    };
+    let dir = tmp("report-drive");
+    let out = dir.join("out");
+    navfuse_ok(&[
+        "run",
+        "examples/drive_0708_nhc.toml",
+        "--outages",
+        "30/90@243381.854",
+        "--smooth",
+        "--out",
+        out.to_str().unwrap(),
+        "-q",
+    ]);
+    let truth = data.join("rtklibexplorer/drive_0708/gnss_1934_sf.pos");
+    navfuse_ok(&[
+        "report",
+        out.to_str().unwrap(),
+        "--truth",
+        truth.to_str().unwrap(),
+        "--lever-arm",
+        "0,-0.05,0",
+        "-q",
+    ]);
+    let page = out.join("report.html");
+    let html = std::fs::read_to_string(&page).unwrap();
+    assert_offline(&html);
+    let names = figure_names(&html);
+    for want in [
+        "ground_track",
+        "error_cdf",
+        "outage_drift",
+        "nis_nhc",
+        "solution_state",
+        "separation_ratio",
+        "states_mounting_yaw_deg",
+    ] {
+        assert!(
+            names.iter().any(|n| n == want),
+            "figure {want} missing from {names:?}"
+        );
+    }
+    // Five outages in the drive, each a coasting interval (NHC only).
+    let table = &html[html.find("Coasting intervals").unwrap()..];
+    let table = &table[..table.find("</table>").unwrap()];
+    assert_eq!(table.matches("dead_reckoning").count(), 5, "{table}");
+    check_in_browser(&page, names.len());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn report_of_a_simulated_run_with_truth() {
     let (dir, sim, out) = sim_and_run(
