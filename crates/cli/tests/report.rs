@@ -100,6 +100,25 @@ fn check_in_browser(page: &Path, figures: usize) {
     );
 }
 
+/// `navfuse report RUN_DIR ARGS... -q` into `page`; the page, checked offline, with its
+/// figure names, every name in `want` among them.
+fn report(run_dir: &Path, page: &Path, args: &[&str], want: &[&str]) -> (String, Vec<String>) {
+    let (r, p) = (run_dir.to_str().unwrap(), page.to_str().unwrap());
+    let mut all = vec!["report", r, "--out", p, "-q"];
+    all.extend_from_slice(args);
+    navfuse_ok(&all);
+    let html = std::fs::read_to_string(page).unwrap();
+    assert_offline(&html);
+    let names = figure_names(&html);
+    for w in want {
+        assert!(
+            names.iter().any(|n| n == w),
+            "figure {w} missing from {names:?}"
+        );
+    }
+    (html, names)
+}
+
 #[test]
 fn the_browser_check_catches_a_broken_page() {
     let Some(b) = chromium() else {
@@ -126,47 +145,40 @@ fn the_browser_check_catches_a_broken_page() {
 fn report_of_the_demo_drive_with_an_outage_and_smoothing() {
     let (dir, out) = run_demo("report-demo", &["--smooth", "--outages", "243350:243380"]);
     let svg = dir.join("svg");
-    navfuse_ok(&[
-        "report",
-        out.to_str().unwrap(),
-        "--truth",
-        "examples/demo/gnss.pos",
-        "--lever-arm",
-        "0,-0.05,0",
-        "--svg",
-        svg.to_str().unwrap(),
-        "-q",
-    ]);
     let page = out.join("report.html");
-    let html = std::fs::read_to_string(&page).unwrap();
-    assert_offline(&html);
-    let names = figure_names(&html);
-    for want in [
-        "ground_track",
-        "position",
-        "velocity",
-        "attitude",
-        "yaw",
-        "error_north",
-        "error_east",
-        "error_down",
-        "error_velocity",
-        "error_cdf",
-        "outage_drift",
-        "nis_gnss_position",
-        "nis_gnss_velocity",
-        "gyroscope_bias",
-        "accelerometer_bias",
-        "states_gnss_fix_bias_n_m",
-        "solution_state",
-        "separation_ratio",
-        "separation_position",
-    ] {
-        assert!(
-            names.iter().any(|n| n == want),
-            "figure {want} missing from {names:?}"
-        );
-    }
+    let (html, names) = report(
+        &out,
+        &page,
+        &[
+            "--truth",
+            "examples/demo/gnss.pos",
+            "--lever-arm",
+            "0,-0.05,0",
+            "--svg",
+            svg.to_str().unwrap(),
+        ],
+        &[
+            "ground_track",
+            "position",
+            "velocity",
+            "attitude",
+            "yaw",
+            "error_north",
+            "error_east",
+            "error_down",
+            "error_velocity",
+            "error_cdf",
+            "outage_drift",
+            "nis_gnss_position",
+            "nis_gnss_velocity",
+            "gyroscope_bias",
+            "accelerometer_bias",
+            "states_gnss_fix_bias_n_m",
+            "solution_state",
+            "separation_ratio",
+            "separation_position",
+        ],
+    );
     // A .pos truth has no attitude: no attitude errors.
     assert!(!names.iter().any(|n| n == "error_yaw"), "{names:?}");
     // The ground track is coloured by state: both states of this run are named.
@@ -225,33 +237,26 @@ fn report_of_the_real_drive_with_outages() {
         "-q",
     ]);
     let truth = data.join("rtklibexplorer/drive_0708/gnss_1934_sf.pos");
-    navfuse_ok(&[
-        "report",
-        out.to_str().unwrap(),
-        "--truth",
-        truth.to_str().unwrap(),
-        "--lever-arm",
-        "0,-0.05,0",
-        "-q",
-    ]);
     let page = out.join("report.html");
-    let html = std::fs::read_to_string(&page).unwrap();
-    assert_offline(&html);
-    let names = figure_names(&html);
-    for want in [
-        "ground_track",
-        "error_cdf",
-        "outage_drift",
-        "nis_nhc",
-        "solution_state",
-        "separation_ratio",
-        "states_mounting_yaw_deg",
-    ] {
-        assert!(
-            names.iter().any(|n| n == want),
-            "figure {want} missing from {names:?}"
-        );
-    }
+    let (html, names) = report(
+        &out,
+        &page,
+        &[
+            "--truth",
+            truth.to_str().unwrap(),
+            "--lever-arm",
+            "0,-0.05,0",
+        ],
+        &[
+            "ground_track",
+            "error_cdf",
+            "outage_drift",
+            "nis_nhc",
+            "solution_state",
+            "separation_ratio",
+            "states_mounting_yaw_deg",
+        ],
+    );
     // Five outages in the drive, each a coasting interval (NHC only).
     let table = &html[html.find("Coasting intervals").unwrap()..];
     let table = &table[..table.find("</table>").unwrap()];
@@ -268,32 +273,21 @@ fn report_of_a_simulated_run_with_truth() {
         &["--outages", "30/200@200", "--smooth"],
     );
     let page = dir.join("sim_report.html");
-    navfuse_ok(&[
-        "report",
-        out.to_str().unwrap(),
-        "--truth",
-        sim.join("truth.nav").to_str().unwrap(),
-        "--out",
-        page.to_str().unwrap(),
-        "-q",
-    ]);
-    let html = std::fs::read_to_string(&page).unwrap();
-    assert_offline(&html);
-    let names = figure_names(&html);
-    for want in [
-        "error_roll",
-        "error_pitch",
-        "error_yaw",
-        "error_cdf",
-        "outage_drift",
-        "solution_state",
-        "smoothed_errors",
-    ] {
-        assert!(
-            names.iter().any(|n| n == want),
-            "figure {want} missing from {names:?}"
-        );
-    }
+    let truth = sim.join("truth.nav");
+    let (html, names) = report(
+        &out,
+        &page,
+        &["--truth", truth.to_str().unwrap()],
+        &[
+            "error_roll",
+            "error_pitch",
+            "error_yaw",
+            "error_cdf",
+            "outage_drift",
+            "solution_state",
+            "smoothed_errors",
+        ],
+    );
     assert!(html.contains("Smoothed solution against the truth"));
     // The simulator's run writes std.txt: the errors have their sigma bands.
     assert_eq!(
