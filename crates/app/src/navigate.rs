@@ -18,6 +18,9 @@ use navfuse_core::{Navigator, RunSummary};
 use navfuse_io::config::RunConfig;
 use navfuse_io::nav::SolutionRecord;
 
+/// The most rows per second of states.csv \[Hz\].
+const STATES_RATE_HZ: f64 = 10.0;
+
 /// Read, check, navigate, push the solution into `sink`; fills `job` as it goes.
 pub(crate) fn navigate(
     mut cfg: RunConfig,
@@ -166,6 +169,9 @@ pub(crate) fn navigate(
     let mut on_innovations =
         |rows: &[navfuse_core::InnovationRow]| sink.borrow_mut().innovations(rows);
     let mut state_names: Option<Vec<String>> = None;
+    // states.csv: the first output epoch of each 0.1 s (slowly varying estimates; at
+    // the IMU rate the file would cost a fifth of the run).
+    let mut states_bucket: Option<i64> = None;
     let result = navfuse_core::run_recording(
         &cfg.nav,
         |c: &navfuse_core::config::NavConfig, t0| {
@@ -208,7 +214,9 @@ pub(crate) fn navigate(
             let mut sink = sink.borrow_mut();
             let mut written = sink.epoch(&rec);
             let layout = n.layout();
-            if written.is_ok() && layout.len() > N_INS {
+            let bucket = ((n.time_gnss() + 1e-6) * STATES_RATE_HZ).floor() as i64;
+            if written.is_ok() && layout.len() > N_INS && states_bucket != Some(bucket) {
+                states_bucket = Some(bucket);
                 let names = state_names.get_or_insert_with(|| extra_names(layout));
                 let p = n.covariance();
                 let std: Vec<f64> = (N_INS..layout.len())

@@ -89,7 +89,8 @@ pub trait SolutionSink {
     fn epoch(&mut self, record: &SolutionRecord) -> Result<(), Error>;
 
     /// The extra filter states at the output epoch just handed to
-    /// [`epoch`](Self::epoch) (only when the filter has states beyond the INS ones).
+    /// [`epoch`](Self::epoch) (only when the filter has states beyond the INS ones,
+    /// and at most at 10 Hz: the first output epoch of each 0.1 s of GNSS time).
     fn states(&mut self, states: &StateValues) -> Result<(), Error> {
         let _ = states;
         Ok(())
