@@ -24,6 +24,7 @@ pub mod integrity;
 pub(crate) mod mechanization;
 pub mod nav;
 pub mod outage;
+pub mod sat;
 pub(crate) mod six_state;
 pub mod smoother;
 pub mod state;
@@ -39,6 +40,7 @@ pub use nav::navigator::{NavError, Navigator};
 pub use nav::run::{run, run_recording, run_with_sources, RunHooks, SourceFactory};
 pub use nav::timeline;
 pub use nav::timeline::TimeDirection;
+pub use sat::{SatId, System};
 pub use types::{
     merge_measurements, merge_more, merge_raw_epochs, GnssFix, GnssRawEpoch, HeadingObs, ImuErrors,
     ImuSample, Measurement, NavState, OdometerSample, SatMeasurement,

@@ -20,6 +20,7 @@ pub use dgps::{corrections_from_reference_station, DgpsCorrection, DgpsCorrectio
 pub use ephemeris::{GpsEphemeris, SatState};
 pub use ephemeris_set::EphemerisSet;
 pub use geometry::{az_el, signal_path, SignalPath};
+pub use navfuse_core::sat::{SatId, System};
 pub use obs::{ObsEpoch, SatObs};
 pub use spp::{SppConfig, SppError, SppMeasurement, SppSolution, SppSolver};
 pub use tight_prep::{EpochPreparer, PreparedEpoch, TightPrepConfig};
