@@ -12,6 +12,7 @@ pub mod ephemeris;
 pub mod ephemeris_set;
 pub mod geometry;
 pub mod obs;
+pub mod precise;
 pub mod spp;
 pub mod tight_prep;
 pub mod time;
