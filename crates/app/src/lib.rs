@@ -31,6 +31,7 @@ mod navigate;
 pub mod plausibility;
 mod sink;
 mod smooth;
+pub mod spp;
 mod stop;
 mod summary;
 mod time_offset;

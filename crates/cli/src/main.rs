@@ -13,6 +13,7 @@ mod eval_cmd;
 mod report_cmd;
 mod run_cmd;
 mod sim_cmd;
+mod spp_cmd;
 
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
@@ -123,6 +124,11 @@ enum Command {
     /// for plotting (min/max decimation keeps every peak); the errors are scored at
     /// up to 50 000 reference epochs against the full-rate solution.
     Report(report_cmd::ReportArgs),
+    /// GNSS-only single point positioning of a RINEX observation file with broadcast
+    /// ephemerides: position, receiver clock, satellites used and DOP per epoch
+    /// (GPS L1 C/A today; the other constellations are issue 19's next step), as
+    /// an RTKLIB .pos file with --out, to compare with RTKLIB's rnx2rtkp directly.
+    Spp(spp_cmd::SppArgs),
     /// Score a solution against a reference trajectory.
     ///
     /// SOLUTION and TRUTH may each be a KF-GINS .nav file (11 columns; week 0 = seconds
@@ -366,6 +372,7 @@ fn main() -> ExitCode {
             smoothed,
         } => export_main(&run_dir, &formats, smoothed),
         Command::Report(a) => report_cmd::main(a),
+        Command::Spp(a) => spp_cmd::main(&a),
         Command::Eval {
             solution,
             truth,

@@ -144,30 +144,83 @@ impl Every {
 /// height \[m\], Q, ns, sdn sde sdu sdne sdeu sdun \[m\], age, ratio. Q is 5 ("single")
 /// for every epoch: RTKLIB has no code for an INS solution.
 pub struct PosWriter {
-    out: Out,
+    file: PosFile,
 }
 
 impl PosWriter {
-    fn new(mut out: Out) -> Result<Self, InputError> {
-        out.line.extend_from_slice(
-            b"% program   : navfuse (GNSS/INS solution exported as an RTKLIB position file)\n\
-% pos mode  : INS/GNSS integrated (Q = 5 for every epoch)\n\
-% elev mask : 0.0 deg\n\
-% ref pos   : none\n\
-%\n\
-% (lat/lon/height=WGS84/ellipsoidal,Q=1:fix,2:float,3:sbas,4:dgps,5:single,6:ppp,ns=# of satellites)\n\
-%  GPST                     latitude(deg) longitude(deg)  height(m)   Q  ns   sdn(m)   sde(m)   sdu(m)  sdne(m)  sdeu(m)  sdun(m) age(s)  ratio\n",
-        );
-        out.put()?;
-        Ok(PosWriter { out })
+    fn new(out: Out) -> Result<Self, InputError> {
+        Ok(PosWriter {
+            file: PosFile::with_out(
+                out,
+                "GNSS/INS solution exported as an RTKLIB position file",
+                "INS/GNSS integrated (Q = 5 for every epoch)",
+                0.0,
+            )?,
+        })
     }
 }
 
-impl RecordWriter for PosWriter {
-    fn write_record(&mut self, r: &SolutionRecord) -> Result<(), InputError> {
+/// One line of an RTKLIB position file.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PosLine {
+    pub gps_week: u32,
+    /// GPS seconds of week.
+    pub sow: f64,
+    /// Latitude, longitude \[rad\], ellipsoidal height \[m\].
+    pub lla: nalgebra::Vector3<f64>,
+    /// RTKLIB's quality: 1 fix, 2 float, 3 SBAS, 4 DGPS, 5 single, 6 PPP.
+    pub q: u8,
+    /// Satellites used.
+    pub ns: usize,
+    /// sdn, sde, sdu, sdne, sdeu, sdun \[m\] (RTKLIB's signed square roots of the
+    /// covariances).
+    pub sd_m: [f64; 6],
+    pub age_s: f64,
+    pub ratio: f64,
+}
+
+/// An RTKLIB `.pos` file (llh, GPST, `YYYY/MM/DD HH:MM:SS.ssssss`): its header, then
+/// one [`PosLine`] per epoch.
+pub struct PosFile {
+    out: Out,
+}
+
+impl PosFile {
+    /// Create `path` with the header: `what` (program line), `mode` (pos mode line),
+    /// the elevation mask \[deg\].
+    pub fn create(
+        path: &Path,
+        what: &str,
+        mode: &str,
+        elev_mask_deg: f64,
+    ) -> Result<Self, InputError> {
+        Self::with_out(Out::create(path)?, what, mode, elev_mask_deg)
+    }
+
+    fn with_out(
+        mut out: Out,
+        what: &str,
+        mode: &str,
+        elev_mask_deg: f64,
+    ) -> Result<Self, InputError> {
+        let _ = write!(
+            out.line,
+            "% program   : navfuse ({what})\n\
+% pos mode  : {mode}\n\
+% elev mask : {elev_mask_deg:.1} deg\n\
+% ref pos   : none\n\
+%\n\
+% (lat/lon/height=WGS84/ellipsoidal,Q=1:fix,2:float,3:sbas,4:dgps,5:single,6:ppp,ns=# of satellites)\n\
+%  GPST                     latitude(deg) longitude(deg)  height(m)   Q  ns   sdn(m)   sde(m)   sdu(m)  sdne(m)  sdeu(m)  sdun(m) age(s)  ratio\n"
+        );
+        out.put()?;
+        Ok(PosFile { out })
+    }
+
+    pub fn write(&mut self, p: &PosLine) -> Result<(), InputError> {
         let line = &mut self.out.line;
         // Microseconds (RTKLIB's own files carry 3 decimals; it reads more).
-        let c = week_sow_to_calendar(r.gps_week, r.nav.t);
+        let c = week_sow_to_calendar(p.gps_week, p.sow);
         let us = (c.second * 1e6).round().min(59_999_999.0);
         let _ = write!(
             line,
@@ -179,25 +232,48 @@ impl RecordWriter for PosWriter {
             c.minute,
             us / 1e6
         );
-        let n = &r.nav;
-        push_f(line, n.lla.x.to_degrees(), 9);
+        push_f(line, p.lla.x.to_degrees(), 9);
         line.push(b' ');
-        push_f(line, n.lla.y.to_degrees(), 9);
+        push_f(line, p.lla.y.to_degrees(), 9);
         line.push(b' ');
-        push_f(line, n.lla.z, 4);
-        let sd = r.std.map_or([0.0; 3], |s| [s[0], s[1], s[2]]);
+        push_f(line, p.lla.z, 4);
+        let sd = p.sd_m;
         let _ = writeln!(
             line,
-            "   5   0 {:8.4} {:8.4} {:8.4} {:8.4} {:8.4} {:8.4} {:6.2} {:6.1}",
-            sd[0], sd[1], sd[2], 0.0, 0.0, 0.0, 0.0, 0.0
+            " {:3} {:3} {:8.4} {:8.4} {:8.4} {:8.4} {:8.4} {:8.4} {:6.2} {:6.1}",
+            p.q, p.ns, sd[0], sd[1], sd[2], sd[3], sd[4], sd[5], p.age_s, p.ratio
         );
         self.out.put()
     }
-    fn flush(&mut self) -> Result<(), InputError> {
+
+    pub fn flush(&mut self) -> Result<(), InputError> {
         self.out.flush()
     }
-    fn finish_boxed(self: Box<Self>) -> Result<(), InputError> {
+
+    pub fn finish(self) -> Result<(), InputError> {
         self.out.finish()
+    }
+}
+
+impl RecordWriter for PosWriter {
+    fn write_record(&mut self, r: &SolutionRecord) -> Result<(), InputError> {
+        let sd = r.std.map_or([0.0; 3], |s| [s[0], s[1], s[2]]);
+        self.file.write(&PosLine {
+            gps_week: r.gps_week,
+            sow: r.nav.t,
+            lla: r.nav.lla,
+            q: 5,
+            ns: 0,
+            sd_m: [sd[0], sd[1], sd[2], 0.0, 0.0, 0.0],
+            age_s: 0.0,
+            ratio: 0.0,
+        })
+    }
+    fn flush(&mut self) -> Result<(), InputError> {
+        self.file.flush()
+    }
+    fn finish_boxed(self: Box<Self>) -> Result<(), InputError> {
+        self.file.finish()
     }
 }
 

@@ -1,6 +1,8 @@
 //! Helpers shared by the binary's integration tests.
 #![allow(dead_code)]
 
+pub mod rtklib;
+
 use nalgebra::Vector3;
 use navfuse_core::earth::lla_diff_ned;
 use navfuse_io::nav::read_nav;
