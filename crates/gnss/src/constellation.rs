@@ -247,3 +247,116 @@ mod tests {
         assert_eq!(sats[5].cus_rad, 3.4180e-6);
     }
 }
+
+/// Broadcast updates: each ephemeris of `ephs` re-issued every `step_s` from its
+/// toe while a re-issue would be the nearest record at some time up to `until`
+/// (and not before `from` minus half a fit interval), so that they cover
+/// `[from, until]` (the control segment uploads GPS
+/// ephemerides every 2 h, each fit for 4 h; IS-GPS-200 20.3.4.4). Each copy is the
+/// same orbit and clock at a later reference time, so the satellites move on
+/// seamlessly from one record to the next: toe' = toc' = toe + dt, M0' = M0 + n dt
+/// with n = sqrt(mu / A^3) + Delta n, i0' = i0 + IDOT dt, Omega0' = Omega0 +
+/// Omega_dot dt (Omega_k = Omega0 + Omega_dot t_k - Omega_e t, Table 20-IV; minus
+/// Omega_e 604800 s per week rolled over), af0' = af0 + af1 dt + af2 dt^2, af1' = af1
+/// + 2 af2 dt, IODE and IODC + 1 per issue (mod 256 / 1024). The input records come
+/// first, then the copies in time order.
+pub fn reissued(
+    ephs: &[GpsEphemeris],
+    from: GpsTime,
+    until: GpsTime,
+    step_s: f64,
+) -> Vec<GpsEphemeris> {
+    use crate::ephemeris::{GPS_MU_M3_PER_S2, GPS_OMEGA_E_RAD_PER_S};
+    let mut out = ephs.to_vec();
+    if step_s <= 0.0 {
+        return out;
+    }
+    for e in ephs {
+        let a = e.sqrt_a_sqrt_m.powi(2);
+        let n = (GPS_MU_M3_PER_S2 / (a * a * a)).sqrt() + e.delta_n_rad_per_s;
+        let mut k = 1;
+        loop {
+            let dt = step_s * f64::from(k);
+            let toe = e.toe.add_s(dt);
+            // Only records that are the nearest one at some time up to `until`.
+            if toe.diff_s(&until) >= step_s / 2.0 {
+                break;
+            }
+            k += 1;
+            if toe.diff_s(&from) < -e.fit_interval_s() / 2.0 {
+                continue;
+            }
+            let weeks = f64::from(toe.week - e.toe.week);
+            let mut c = e.clone();
+            c.toe = toe;
+            c.toc = e.toc.add_s(dt);
+            let dtc = c.toc.diff_s(&e.toc);
+            c.af0_s = e.af0_s + e.af1_s_per_s * dtc + e.af2_s_per_s2 * dtc * dtc;
+            c.af1_s_per_s = e.af1_s_per_s + 2.0 * e.af2_s_per_s2 * dtc;
+            c.m0_rad = wrap_2pi(e.m0_rad + n * dt);
+            c.i0_rad = e.i0_rad + e.idot_rad_per_s * dt;
+            c.omega0_rad = wrap_2pi(
+                e.omega0_rad + e.omega_dot_rad_per_s * dt
+                    - GPS_OMEGA_E_RAD_PER_S * 604_800.0 * weeks,
+            );
+            c.iode = ((u32::from(e.iode) + k as u32 - 1) % 256) as u16;
+            c.iodc = ((u32::from(e.iodc) + k as u32 - 1) % 1024) as u16;
+            c.transmission_time = Some(toe.add_s(-7_200.0));
+            out.push(c);
+        }
+    }
+    out.sort_by(|a, b| a.toe.diff_s(&b.toe).total_cmp(&0.0).then(a.prn.cmp(&b.prn)));
+    out
+}
+
+fn wrap_2pi(x: f64) -> f64 {
+    x.rem_euclid(2.0 * std::f64::consts::PI)
+}
+
+#[cfg(test)]
+mod reissue_tests {
+    use super::*;
+
+    #[test]
+    fn reissued_records_continue_the_same_orbit_and_clock_over_a_day_and_a_week_end() {
+        // Start 10 h before the end of a week: the day crosses the week rollover.
+        let t0 = GpsTime::new(2111, 604_800.0 - 36_000.0);
+        let mut ephs = seed000_table3(2111);
+        for e in ephs.iter_mut() {
+            e.toe = t0;
+            e.toc = t0;
+            e.af0_s = 2e-4;
+            e.af1_s_per_s = 1e-11;
+            e.af2_s_per_s2 = 1e-19;
+            e.e = 0.01;
+            e.idot_rad_per_s = 1e-10;
+        }
+        let until = t0.add_s(86_400.0);
+        let all = reissued(&ephs, t0, until, 7_200.0);
+        // The first record and one every 2 h to the end.
+        assert_eq!(all.len(), ephs.len() * 13);
+        let mut worst = (0.0f64, 0.0f64);
+        for c in &all {
+            let orig = ephs.iter().find(|e| e.prn == c.prn).unwrap();
+            for dt in [-3_600.0, 0.0, 1_800.0, 3_599.0] {
+                let t = c.toe.add_s(dt);
+                let (a, b) = (orig.sat_state(t), c.sat_state(t));
+                worst.0 = worst.0.max((a.pos_ecef_m - b.pos_ecef_m).norm());
+                worst.1 = worst.1.max((a.clock_bias_s - b.clock_bias_s).abs());
+            }
+        }
+        assert!(worst.0 < 1e-4 && worst.1 < 1e-15, "{worst:?}");
+        assert!(
+            all.iter().any(|e| e.toe.week == 2112),
+            "records in the next week"
+        );
+        let iodes: Vec<u16> = all
+            .iter()
+            .filter(|e| e.prn == ephs[0].prn)
+            .map(|e| e.iode)
+            .collect();
+        let mut distinct = iodes.clone();
+        distinct.dedup();
+        assert_eq!(distinct.len(), iodes.len(), "a new IODE per issue");
+    }
+}

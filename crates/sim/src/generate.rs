@@ -9,7 +9,7 @@ use std::time::Instant;
 
 use nalgebra::{UnitQuaternion, Vector3};
 use navfuse_core::types::{ImuErrors, NavState};
-use navfuse_gnss::constellation::{nominal_gps24, seed000_table3};
+use navfuse_gnss::constellation::{nominal_gps24, reissued, seed000_table3};
 use navfuse_gnss::ephemeris::GpsEphemeris;
 use navfuse_gnss::time::GpsTime;
 use navfuse_io::error::InputError;
@@ -103,9 +103,17 @@ fn constellation(
         }
         ephs
     };
+    // Re-issued every 2 h (as the control segment uploads) so that a scenario of any
+    // length has valid ephemerides throughout.
+    let start = GpsTime::new(week, sc.file.start.time_s);
+    let end = start.add_s(sc.trajectory.duration());
+    let refresh = |ephs: Vec<GpsEphemeris>| reissued(&ephs, start, end, 7_200.0);
     match g.constellation.as_str() {
-        "nominal24" => Ok((with_ura(nominal_gps24(GpsTime::new(week, toe_sow))), None)),
-        "seed000" => Ok((with_ura(seed000_table3(week)), None)),
+        "nominal24" => Ok((
+            with_ura(refresh(nominal_gps24(GpsTime::new(week, toe_sow)))),
+            None,
+        )),
+        "seed000" => Ok((with_ura(refresh(seed000_table3(week))), None)),
         _ => {
             let p = sc
                 .base_dir()

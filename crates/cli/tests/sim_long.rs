@@ -1,0 +1,41 @@
+//! Issue 19 (simulator): the synthetic constellations are re-issued every 2 h, so a
+//! raw-GNSS scenario longer than one ephemeris' fit has satellites at every epoch
+//! (before, the GNSS stopped 2 h after the start). Six hours at rest, GNSS every 10 s.
+
+mod common;
+
+use common::{simulate, tmp};
+
+#[test]
+fn six_hours_of_raw_gnss_have_satellites_at_every_epoch() {
+    let dir = tmp("sim-long");
+    std::fs::create_dir_all(&dir).unwrap();
+    let sc = dir.join("long.toml");
+    std::fs::write(
+        &sc,
+        "seed = 3\ndescription = \"6 h at rest, raw GNSS\"\n\n[start]\ngps_week = 2381\n\
+         time_s = 345600.0\nposition_deg_m = [21.0285, 105.8542, 15.0]\nheading_deg = 20\n\n\
+         [imu]\ngrade = \"adis16405\"\nrate_hz = 10\n\n[gnss]\nrate_hz = 0.1\nraw = true\n\n\
+         [gnss.errors]\nsa_m = 0\n\n[[segment]]\ntype = \"static\"\nduration_s = 21600\n",
+    )
+    .unwrap();
+    let sim = dir.join("sim");
+    simulate(&sc, &sim);
+    let obs = std::fs::read_to_string(sim.join("obs.rnx")).unwrap();
+    let counts: Vec<usize> = obs
+        .lines()
+        .filter(|l| l.starts_with('>'))
+        .map(|l| l.split_whitespace().last().unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(counts.len(), 2161, "an epoch every 10 s for 6 h");
+    let min = counts.iter().min().unwrap();
+    assert!(*min >= 5, "fewest satellites at an epoch: {min}");
+    // The navigation file holds the re-issues: one record per satellite every 2 h.
+    let nav = std::fs::read_to_string(sim.join("nav.rnx")).unwrap();
+    let records = nav
+        .lines()
+        .filter(|l| l.starts_with('G') && l.as_bytes().get(1).is_some_and(u8::is_ascii_digit))
+        .count();
+    assert_eq!(records, 24 * 4, "24 satellites, toe 0, 2, 4, 6 h");
+    std::fs::remove_dir_all(&dir).ok();
+}
