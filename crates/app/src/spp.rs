@@ -28,6 +28,9 @@ pub struct SppJob {
     pub troposphere: bool,
     /// Chi-square fault detection and exclusion.
     pub fde: bool,
+    /// Power p of the elevation weighting b^2 / sin^p el: 2 (navfuse's default), 1
+    /// (what RTKLIB 2.4.3's pntpos computes, to compare with it).
+    pub elevation_sin_power: f64,
 }
 
 /// The solutions, one per observation epoch, and what the run found.
@@ -104,13 +107,14 @@ pub fn run_spp(job: &SppJob) -> Result<SppRun, Error> {
             job.obs.display()
         )));
     }
-    let cfg = SppConfig {
+    let mut cfg = SppConfig {
         elevation_mask_rad: job.elevation_mask_deg.to_radians(),
         iono,
         tropo_saastamoinen: job.troposphere,
         fde: job.fde,
         ..SppConfig::default()
     };
+    cfg.errors.elevation_sin_power = job.elevation_sin_power;
     let epochs = solve_epochs(&obs, &set, cfg);
     Ok(SppRun { epochs, notes })
 }

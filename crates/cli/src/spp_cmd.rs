@@ -29,6 +29,10 @@ pub struct SppArgs {
     /// No fault detection and exclusion (the chi-square test of the residuals).
     #[arg(long)]
     pub no_fde: bool,
+    /// Weight the pseudoranges as RTKLIB 2.4.3's pntpos does (b^2 / sin el) instead
+    /// of navfuse's b^2 / sin^2 el, to compare with rnx2rtkp epoch by epoch.
+    #[arg(long)]
+    pub rtklib_weights: bool,
     /// The solution as an RTKLIB .pos file (GPST, llh, Q = 5, ns, sdn..sdun).
     #[arg(long, value_name = "FILE.pos")]
     pub out: Option<PathBuf>,
@@ -61,6 +65,7 @@ pub fn main(a: &SppArgs) -> Result<()> {
         broadcast_iono: a.iono == "brdc",
         troposphere: a.tropo == "saas",
         fde: !a.no_fde,
+        elevation_sin_power: if a.rtklib_weights { 1.0 } else { 2.0 },
     };
     let run = run_spp(&job)?;
     for n in &run.notes {
