@@ -17,6 +17,7 @@ pub mod nav;
 pub mod nav_written;
 pub mod odometer;
 pub mod rinex_nav;
+mod rinex_nav_gnss;
 pub mod rinex_obs;
 pub mod smoothed;
 pub mod table;
