@@ -14,6 +14,7 @@
 use crate::error::InputError;
 use crate::fmt::LineReader;
 use crate::rinex_nav_gnss as other;
+use navfuse_gnss::ephemeris::kepler::KeplerOrbit;
 use navfuse_gnss::ephemeris::Ephemeris;
 use navfuse_gnss::time::{GpstCalendar, HALF_WEEK_S, SECONDS_PER_WEEK};
 use navfuse_gnss::{
@@ -792,29 +793,12 @@ fn read_gps_record(
     };
     // Fit interval in hours (3.04 Table A6); 0 or a 0/1 flag value means 4 h.
     let fit_interval_h = if f[25] >= 4.0 { f[25] } else { 4.0 };
-    Ok(GpsEphemeris {
-        prn: prn as u8,
+    let eph = GpsEphemeris {
         toc,
         af0_s: af0,
         af1_s_per_s: af1,
         af2_s_per_s2: af2,
         iode,
-        crs_m: f[1],
-        delta_n_rad_per_s: f[2],
-        m0_rad: f[3],
-        cuc_rad: f[4],
-        e,
-        cus_rad: f[6],
-        sqrt_a_sqrt_m: f[7],
-        toe,
-        cic_rad: f[9],
-        omega0_rad: f[10],
-        cis_rad: f[11],
-        i0_rad: f[12],
-        crc_m: f[13],
-        omega_rad: f[14],
-        omega_dot_rad_per_s: f[15],
-        idot_rad_per_s: f[16],
         codes_l2: f[17],
         l2p_flag: f[19],
         sv_accuracy_m: f[20],
@@ -823,7 +807,33 @@ fn read_gps_record(
         iodc,
         transmission_time,
         fit_interval_h,
-    })
+        ..GpsEphemeris::zeroed(prn as u8, toe)
+    };
+    Ok(eph.with_orbit(&kepler_from_fields(&f)))
+}
+
+/// The Keplerian elements from orbit fields 1-16 of the common RINEX layout
+/// (GPS Table A6, Galileo A8, QZSS A12, BeiDou A14: Crs, Delta n, M0, Cuc, e, Cus,
+/// sqrt(A), toe, Cic, Omega0, Cis, i0, Crc, omega, Omega dot, IDOT).
+pub(crate) fn kepler_from_fields(f: &[f64]) -> KeplerOrbit {
+    KeplerOrbit {
+        crs_m: f[1],
+        delta_n_rad_per_s: f[2],
+        m0_rad: f[3],
+        cuc_rad: f[4],
+        e: f[5],
+        cus_rad: f[6],
+        sqrt_a_sqrt_m: f[7],
+        toe_sow_s: f[8],
+        cic_rad: f[9],
+        omega0_rad: f[10],
+        cis_rad: f[11],
+        i0_rad: f[12],
+        crc_m: f[13],
+        omega_rad: f[14],
+        omega_dot_rad_per_s: f[15],
+        idot_rad_per_s: f[16],
+    }
 }
 
 /// A number as a Fortran-style `D19.12` field written with `E` (RINEX 3.04 §6.7 allows

@@ -6,7 +6,9 @@
 
 use crate::error::InputError;
 use crate::fmt::LineReader;
-use crate::rinex_nav::{cols, int_in, parse_num, required, whole_in, ORBIT_FIELDS};
+use crate::rinex_nav::{
+    cols, int_in, kepler_from_fields, parse_num, required, whole_in, ORBIT_FIELDS,
+};
 use nalgebra::Vector3;
 use navfuse_gnss::ephemeris::beidou::BDT_WEEK0_IN_GPS_WEEKS;
 use navfuse_gnss::ephemeris::kepler::KeplerOrbit;
@@ -158,24 +160,7 @@ impl Orbit {
                 format!("expected 0 <= toe < 604800 s, found {}", f[8]),
             ));
         }
-        Ok(KeplerOrbit {
-            crs_m: f[1],
-            delta_n_rad_per_s: f[2],
-            m0_rad: f[3],
-            cuc_rad: f[4],
-            e: f[5],
-            cus_rad: f[6],
-            sqrt_a_sqrt_m: f[7],
-            toe_sow_s: f[8],
-            cic_rad: f[9],
-            omega0_rad: f[10],
-            cis_rad: f[11],
-            i0_rad: f[12],
-            crc_m: f[13],
-            omega_rad: f[14],
-            omega_dot_rad_per_s: f[15],
-            idot_rad_per_s: f[16],
-        })
+        Ok(kepler_from_fields(&f))
     }
     /// toe from its week field (index `wi`), and the transmission time (index 24,
     /// seconds of that week, moved to within half a week of toe; 0.9999e9 = unknown).

@@ -100,3 +100,63 @@ impl GalileoEphemeris {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ephemeris::kepler::KeplerOrbit;
+
+    fn eph(data_sources: u32, health: u32) -> GalileoEphemeris {
+        let t = GpsTime::new(2111, 345_600.0);
+        GalileoEphemeris {
+            prn: 1,
+            toc: t,
+            af0_s: 0.0,
+            af1_s_per_s: 0.0,
+            af2_s_per_s2: 0.0,
+            iodnav: 0,
+            orbit: KeplerOrbit {
+                sqrt_a_sqrt_m: 5_440.6,
+                e: 0.0,
+                i0_rad: 0.98,
+                omega0_rad: 0.0,
+                omega_rad: 0.0,
+                m0_rad: 0.0,
+                delta_n_rad_per_s: 0.0,
+                omega_dot_rad_per_s: 0.0,
+                idot_rad_per_s: 0.0,
+                cuc_rad: 0.0,
+                cus_rad: 0.0,
+                crc_m: 0.0,
+                crs_m: 0.0,
+                cic_rad: 0.0,
+                cis_rad: 0.0,
+                toe_sow_s: t.sow,
+            },
+            toe: t,
+            data_sources,
+            sisa_m: 3.12,
+            health,
+            bgd_e1_e5a_s: 1e-9,
+            bgd_e1_e5b_s: 2e-9,
+            transmission_time: None,
+        }
+    }
+
+    #[test]
+    fn message_health_and_bgd() {
+        // 258 = I/NAV E5b + clock for E5b,E1; 513 = I/NAV E1-B + E5b,E1.
+        let inav = eph(513, 0);
+        assert_eq!(inav.message(), GalileoMessage::INav);
+        assert_eq!(inav.group_delay_s(), 2e-9);
+        let fnav = eph(258, 0);
+        assert_eq!(fnav.message(), GalileoMessage::FNav);
+        assert_eq!(fnav.group_delay_s(), 1e-9);
+        // E5a unhealthy (bits 4-5) does not concern I/NAV; E1-B DVS (bit 0) does.
+        assert!(eph(513, 0b11_0000).healthy() && !eph(258, 0b11_0000).healthy());
+        assert!(!eph(513, 1).healthy() && eph(258, 1).healthy());
+        // Circular orbit: radius A.
+        let s = inav.sat_state(inav.toe.add_s(600.0));
+        assert!((s.pos_ecef_m.norm() - 5_440.6f64.powi(2)).abs() < 1e-3);
+    }
+}

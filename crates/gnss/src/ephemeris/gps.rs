@@ -180,6 +180,27 @@ impl GpsEphemeris {
         }
     }
 
+    /// This ephemeris with the Keplerian elements of `o` (its `toe_sow_s` is not
+    /// used: `toe` carries the week too).
+    pub fn with_orbit(mut self, o: &KeplerOrbit) -> Self {
+        self.sqrt_a_sqrt_m = o.sqrt_a_sqrt_m;
+        self.e = o.e;
+        self.i0_rad = o.i0_rad;
+        self.omega0_rad = o.omega0_rad;
+        self.omega_rad = o.omega_rad;
+        self.m0_rad = o.m0_rad;
+        self.delta_n_rad_per_s = o.delta_n_rad_per_s;
+        self.omega_dot_rad_per_s = o.omega_dot_rad_per_s;
+        self.idot_rad_per_s = o.idot_rad_per_s;
+        self.cuc_rad = o.cuc_rad;
+        self.cus_rad = o.cus_rad;
+        self.crc_m = o.crc_m;
+        self.crs_m = o.crs_m;
+        self.cic_rad = o.cic_rad;
+        self.cis_rad = o.cis_rad;
+        self
+    }
+
     /// Position, velocity and clock at GPST t in the ECEF frame at t
     /// (IS-GPS-200 Table 20-IV; velocity by the analytic time derivative of each step).
     pub fn sat_state(&self, t: GpsTime) -> SatState {
