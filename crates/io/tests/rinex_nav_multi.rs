@@ -189,3 +189,27 @@ fn other_system_errors_name_line_and_field() {
         .to_string();
     assert!(err.contains(&format!(":{ln}: field 'sqrt(A)'")), "{err}");
 }
+
+/// On real data the store picks, for GPS, exactly the record `EphemerisSet` picks.
+#[test]
+fn store_keeps_the_gps_selection() {
+    let Some(p) = esbc() else { return };
+    let nav = read_rinex_nav(&p).unwrap();
+    let set = navfuse_gnss::EphemerisSet::new(nav.gps.clone());
+    let store = nav.store();
+    let mut n = 0;
+    for k in 0..(24 * 6) {
+        let t = GpsTime::new(2111, 345_600.0 + 600.0 * f64::from(k) + 0.3);
+        for prn in set.prns() {
+            let a = set.select(prn, t);
+            let b = store.select(SatId::gps(prn), t);
+            match (a, b) {
+                (Some(a), Some(navfuse_gnss::Ephemeris::Gps(b))) => assert_eq!(a, b),
+                (None, None) => {}
+                other => panic!("G{prn:02} at {t:?}: {other:?}"),
+            }
+            n += usize::from(a.is_some());
+        }
+    }
+    assert!(n > 1_000, "{n}");
+}
