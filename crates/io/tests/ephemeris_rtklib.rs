@@ -82,10 +82,9 @@ fn every_system_matches_rtklib() {
     let dir = std::env::temp_dir().join(format!("navfuse_eph_rtklib_{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let pos = dir.join("out.pos");
-    // Every 30 min over the 3 h observation file, at hh:15 and hh:45 (RTKLIB selects
-    // the record at the reception time, we at the transmission time: at whole hours
-    // two records of GPS can tie; RTKLIB evaluates the satellites it observes, at
-    // their transmission times).
+    // Every 30 min over the 3 h observation file (epochs at hh:00 and hh:30: RTKLIB
+    // aligns -ti to the time grid). RTKLIB evaluates the satellites it observes, at
+    // their transmission times, and selects the record at the reception time.
     let st = Command::new("rnx2rtkp")
         .args([
             "-x",
