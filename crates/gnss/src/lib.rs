@@ -1,4 +1,5 @@
-//! navfuse-gnss: the GNSS layer. GPS time, LNAV broadcast ephemeris (IS-GPS-200),
+//! navfuse-gnss: the GNSS layer. GPS time, broadcast ephemerides of GPS, QZSS,
+//! Galileo, BeiDou and GLONASS (`ephemeris`, `ephemeris_store`),
 //! signal geometry with light time and Earth rotation, Klobuchar and Saastamoinen
 //! delays, synthetic constellations, single point positioning (`spp`), DGPS
 //! corrections (`dgps`) and tight-coupling measurement preparation (`tight_prep`).
@@ -10,6 +11,7 @@ pub mod constellation;
 pub mod dgps;
 pub mod ephemeris;
 pub mod ephemeris_set;
+pub mod ephemeris_store;
 pub mod geometry;
 pub mod obs;
 pub mod precise;
@@ -18,8 +20,12 @@ pub mod tight_prep;
 pub mod time;
 
 pub use dgps::{corrections_from_reference_station, DgpsCorrection, DgpsCorrections};
-pub use ephemeris::{GpsEphemeris, SatState};
+pub use ephemeris::{
+    BeiDouEphemeris, Ephemeris, GalileoEphemeris, GalileoMessage, GlonassEphemeris, GpsEphemeris,
+    SatState,
+};
 pub use ephemeris_set::EphemerisSet;
+pub use ephemeris_store::EphemerisStore;
 pub use geometry::{az_el, signal_path, SignalPath};
 pub use navfuse_core::sat::{SatId, System};
 pub use obs::{ObsEpoch, SatObs};

@@ -18,6 +18,7 @@ pub mod nav_written;
 pub mod odometer;
 pub mod rinex_clk;
 pub mod rinex_nav;
+mod rinex_nav_gnss;
 pub mod rinex_obs;
 pub mod smoothed;
 pub mod sp3;

@@ -1,17 +1,25 @@
-//! RINEX navigation files: GPS broadcast ephemerides.
+//! RINEX navigation files: broadcast ephemerides of every system.
 //!
-//! Reads RINEX 2.10/2.11 GPS navigation files (type `N`) and RINEX 3.0x navigation
-//! files (GPS-only or mixed). GPS records (RINEX 3.04 Table A6, 2.11 Table A4) are
-//! kept; records of other systems are counted and skipped by their record size
-//! (RINEX 3.04 §4.x: GLONASS and SBAS 4 lines, Galileo/BeiDou/QZSS/IRNSS 8 lines).
-//! Header: ION ALPHA / ION BETA (v2), IONOSPHERIC CORR GPSA/GPSB (v3), LEAP SECONDS.
-//! Numbers may use `D` or `E` exponents. RINEX 4 is refused with a clear error.
+//! Reads RINEX 2.10/2.11 GPS navigation files (type `N`), RINEX 3.0x navigation
+//! files (GPS-only or mixed) and RINEX 4.00. GPS records (RINEX 3.04 Table A6, 2.11
+//! Table A4) go to `gps`; Galileo, BeiDou, GLONASS and QZSS records to their lists
+//! (`rinex_nav_gnss`; GLONASS has 3 orbit lines before 3.05, 4 from 3.05 and in 4.00);
+//! SBAS and NavIC records, RINEX 4 CNAV/CNV1-3 messages, STO and EOP records are
+//! skipped and counted (`skipped`). Header: ION ALPHA / ION BETA (v2), IONOSPHERIC
+//! CORR GPSA/GPSB, QZSA/QZSB, BDSA/BDSB, GAL (v3), LEAP SECONDS; RINEX 4 `> ION`
+//! records when the header has none. Numbers may use `D` or `E` exponents. RINEX
+//! 4.01 and later are refused (they add messages this reader does not know).
 //! Writes RINEX 3.04 GPS navigation files (fixed-width D19.12 fields).
 
 use crate::error::InputError;
 use crate::fmt::LineReader;
+use crate::rinex_nav_gnss as other;
+use navfuse_gnss::ephemeris::kepler::KeplerOrbit;
+use navfuse_gnss::ephemeris::Ephemeris;
 use navfuse_gnss::time::{GpstCalendar, HALF_WEEK_S, SECONDS_PER_WEEK};
-use navfuse_gnss::{GpsEphemeris, GpsTime};
+use navfuse_gnss::{
+    BeiDouEphemeris, EphemerisStore, GalileoEphemeris, GlonassEphemeris, GpsEphemeris, GpsTime,
+};
 use std::io::{self, Write};
 use std::path::Path;
 
@@ -26,10 +34,70 @@ pub struct RinexNav {
     pub iono_beta: Option<[f64; 4]>,
     /// GPS-UTC leap seconds from the header.
     pub leap_seconds: Option<i32>,
-    /// Records of other systems that were skipped.
+    /// Records not in `gps` (other systems, RINEX 4 non-LNAV messages, STO/EOP/ION
+    /// records), whether read into the lists below or skipped (`skipped` says which).
     pub skipped_records: usize,
+    /// QZSS LNAV ephemerides (`prn` is the J number), in file order.
+    pub qzss: Vec<GpsEphemeris>,
+    /// Galileo I/NAV and F/NAV ephemerides.
+    pub galileo: Vec<GalileoEphemeris>,
+    /// BeiDou D1/D2 ephemerides (times BDT).
+    pub beidou: Vec<BeiDouEphemeris>,
+    /// GLONASS ephemerides (tb in GPST).
+    pub glonass: Vec<GlonassEphemeris>,
+    /// Ionosphere coefficients of other systems (header or RINEX 4 ION records).
+    pub iono: OtherIono,
+    /// What was skipped, by kind.
+    pub skipped: SkippedCounts,
     /// Findings that did not stop the read: a damaged last record dropped.
     pub warnings: Vec<String>,
+}
+
+/// Klobuchar sets of QZSS and BeiDou, NeQuick-G of Galileo.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct OtherIono {
+    /// QZSS alpha, beta (IS-QZSS-PNT §5.1.2.1.4, the GPS model).
+    pub qzss_klobuchar: Option<([f64; 4], [f64; 4])>,
+    /// BeiDou alpha, beta (SIS ICD B1I 3.0 §5.3.3.3).
+    pub beidou_klobuchar: Option<([f64; 4], [f64; 4])>,
+    /// Galileo a_i0 [sfu], a_i1 [sfu/deg], a_i2 [sfu/deg^2] (OS SIS ICD 2.1 §5.1.6).
+    pub galileo_nequick: Option<[f64; 3]>,
+}
+
+/// Records read but not kept, by kind.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct SkippedCounts {
+    /// SBAS records (orbits not used here).
+    pub sbas: usize,
+    /// NavIC records.
+    pub navic: usize,
+    /// RINEX 4 ephemeris messages other than LNAV/INAV/FNAV/D1/D2/FDMA (CNAV, CNV1-3).
+    pub other_messages: usize,
+    /// RINEX 4 system time offsets (STO) and Earth orientation (EOP) records.
+    pub sto_eop: usize,
+    /// RINEX 4 ION records whose coefficients were not kept (already in the header,
+    /// or of another kind).
+    pub ion: usize,
+}
+
+impl RinexNav {
+    /// Every ephemeris read, for all systems, as one store.
+    pub fn store(&self) -> EphemerisStore {
+        let mut s = EphemerisStore::new(self.gps.iter().cloned().map(Ephemeris::Gps));
+        self.qzss
+            .iter()
+            .for_each(|e| s.push(Ephemeris::Qzss(e.clone())));
+        self.galileo
+            .iter()
+            .for_each(|e| s.push(Ephemeris::Galileo(e.clone())));
+        self.beidou
+            .iter()
+            .for_each(|e| s.push(Ephemeris::BeiDou(e.clone())));
+        self.glonass
+            .iter()
+            .for_each(|e| s.push(Ephemeris::Glonass(e.clone())));
+        s
+    }
 }
 
 /// Header label columns (RINEX 3.04 §5.1: label in columns 61-80).
@@ -39,7 +107,7 @@ const LABEL_COL: usize = 60;
 const TT_UNKNOWN: f64 = 0.9999e9;
 
 /// Names of the 28 broadcast-orbit fields, 4 per line (RINEX 3.04 Table A6).
-const ORBIT_FIELDS: [&str; 28] = [
+pub(crate) const ORBIT_FIELDS: [&str; 28] = [
     "IODE",
     "Crs",
     "Delta n",
@@ -115,7 +183,12 @@ fn trim(s: &[u8]) -> &[u8] {
 }
 
 /// Parse a Fortran number (`D`/`d` exponents allowed); Ok(None) for a blank field.
-fn parse_num(path: &Path, ln: usize, name: &str, text: &[u8]) -> Result<Option<f64>, InputError> {
+pub(crate) fn parse_num(
+    path: &Path,
+    ln: usize,
+    name: &str,
+    text: &[u8],
+) -> Result<Option<f64>, InputError> {
     let t = trim(text);
     if t.is_empty() {
         return Ok(None);
@@ -137,13 +210,13 @@ fn parse_num(path: &Path, ln: usize, name: &str, text: &[u8]) -> Result<Option<f
     }
 }
 
-fn required(path: &Path, ln: usize, name: &str, text: &[u8]) -> Result<f64, InputError> {
+pub(crate) fn required(path: &Path, ln: usize, name: &str, text: &[u8]) -> Result<f64, InputError> {
     parse_num(path, ln, name, text)?.ok_or_else(|| {
         InputError::at_field(path, ln, name, "expected a number, found a blank field")
     })
 }
 
-fn int_in(
+pub(crate) fn int_in(
     path: &Path,
     ln: usize,
     name: &str,
@@ -176,7 +249,7 @@ fn int_in(
 }
 
 /// A float field that must hold a whole number in lo..=hi.
-fn whole_in(
+pub(crate) fn whole_in(
     path: &Path,
     ln: usize,
     name: &str,
@@ -193,6 +266,27 @@ fn whole_in(
         ));
     }
     Ok(v)
+}
+
+/// N header coefficients of width 12 from column `start` (RINEX 3.05 §5.2
+/// `IONOSPHERIC CORR`: A4,1X,4D12.4; v2 `ION ALPHA`: 2X,4D12.4).
+fn coeffs<const N: usize>(
+    path: &Path,
+    ln: usize,
+    line: &[u8],
+    name: &str,
+    start: usize,
+) -> Result<[f64; N], InputError> {
+    let mut c = [0.0; N];
+    for (k, v) in c.iter_mut().enumerate() {
+        *v = required(
+            path,
+            ln,
+            name,
+            cols(line, start + 12 * k, start + 12 + 12 * k),
+        )?;
+    }
+    Ok(c)
 }
 
 fn header_label(line: &[u8]) -> &[u8] {
@@ -232,7 +326,9 @@ pub fn read_rinex_nav(path: &Path) -> Result<RinexNav, InputError> {
             ))
         }
         3 if type_char == b'N' => {}
-        3 => {
+        // RINEX 4.00 (4.01+ add messages this reader does not know: refused).
+        4 if type_char == b'N' && version == 4.0 => {}
+        3 | 4 if version == 4.0 || major == 3 => {
             return Err(InputError::at_field(
                 path,
                 ln,
@@ -248,11 +344,12 @@ pub fn read_rinex_nav(path: &Path) -> Result<RinexNav, InputError> {
                 path,
                 ln,
                 "RINEX version",
-                format!("version {version} is not supported (2.10, 2.11 and 3.0x are)"),
+                format!("version {version} is not supported (2.10, 2.11, 3.0x and 4.00 are)"),
             ))
         }
     }
-    let v3 = major == 3;
+    let v3 = major >= 3;
+    let v4 = major == 4;
     loop {
         let (ln, line) = match rd.next_line()? {
             Some(x) => x,
@@ -262,15 +359,7 @@ pub fn read_rinex_nav(path: &Path) -> Result<RinexNav, InputError> {
         match label {
             b"END OF HEADER" => break,
             b"ION ALPHA" | b"ION BETA" => {
-                let mut c = [0.0; 4];
-                for (k, v) in c.iter_mut().enumerate() {
-                    *v = required(
-                        path,
-                        ln,
-                        "ION ALPHA/BETA",
-                        cols(line, 2 + 12 * k, 14 + 12 * k),
-                    )?;
-                }
+                let c = coeffs::<4>(path, ln, line, "ION ALPHA/BETA", 2)?;
                 if label == b"ION ALPHA" {
                     nav.iono_alpha = Some(c);
                 } else {
@@ -279,16 +368,24 @@ pub fn read_rinex_nav(path: &Path) -> Result<RinexNav, InputError> {
             }
             b"IONOSPHERIC CORR" => {
                 let kind = cols(line, 0, 4);
-                if kind == b"GPSA" || kind == b"GPSB" {
-                    let mut c = [0.0; 4];
-                    for (k, v) in c.iter_mut().enumerate() {
-                        *v = required(
-                            path,
-                            ln,
-                            "IONOSPHERIC CORR",
-                            cols(line, 5 + 12 * k, 17 + 12 * k),
-                        )?;
+                let name = "IONOSPHERIC CORR";
+                if kind == b"GAL " {
+                    nav.iono.galileo_nequick = Some(coeffs::<3>(path, ln, line, name, 5)?);
+                } else if matches!(kind, b"QZSA" | b"QZSB" | b"BDSA" | b"BDSB") {
+                    let c = coeffs::<4>(path, ln, line, name, 5)?;
+                    let slot = if kind.starts_with(b"QZ") {
+                        &mut nav.iono.qzss_klobuchar
+                    } else {
+                        &mut nav.iono.beidou_klobuchar
+                    };
+                    let pair = slot.get_or_insert(([0.0; 4], [0.0; 4]));
+                    if kind[3] == b'A' {
+                        pair.0 = c;
+                    } else {
+                        pair.1 = c;
                     }
+                } else if kind == b"GPSA" || kind == b"GPSB" {
+                    let c = coeffs::<4>(path, ln, line, name, 5)?;
                     if kind == b"GPSA" {
                         nav.iono_alpha = Some(c);
                     } else {
@@ -304,7 +401,15 @@ pub fn read_rinex_nav(path: &Path) -> Result<RinexNav, InputError> {
         }
     }
     // Records. A last record cut by the end of the file is dropped with a warning.
-    match read_records(&mut rd, path, v3, &mut nav) {
+    let res = if v4 {
+        read_records_v4(&mut rd, path, &mut nav)
+    } else {
+        // RINEX 3.05 added a fourth GLONASS orbit line (status flags, L1/L2 delay
+        // difference, URAI, health flags; 3.05 Table A10).
+        let glo_orbit_lines = if version >= 3.05 - 1e-9 { 4 } else { 3 };
+        read_records(&mut rd, path, v3, glo_orbit_lines, &mut nav)
+    };
+    match res {
         Ok(()) => {}
         Err(e) if rd.cut_last_line() => nav.warnings.push(e.last_line_warning()),
         Err(e) => return Err(e),
@@ -316,6 +421,7 @@ fn read_records(
     rd: &mut LineReader,
     path: &Path,
     v3: bool,
+    glo_orbit_lines: usize,
     nav: &mut RinexNav,
 ) -> Result<(), InputError> {
     while let Some((ln, l)) = rd.next_line()? {
@@ -327,7 +433,8 @@ fn read_records(
             let sys = line.first().copied().unwrap_or(b' ');
             let lines = match sys {
                 b'G' => 8,
-                b'R' | b'S' => 4,
+                b'R' => 1 + glo_orbit_lines,
+                b'S' => 4,
                 b'E' | b'C' | b'J' | b'I' => 8,
                 _ => {
                     return Err(InputError::at_field(
@@ -342,24 +449,182 @@ fn read_records(
                 }
             };
             if sys != b'G' {
-                for _ in 1..lines {
-                    if rd.next_line()?.is_none() {
-                        return Err(InputError::at_line(
-                            path,
-                            ln,
-                            format!(
-                                "record truncated: a '{}' record has {lines} lines",
-                                sys as char
-                            ),
-                        ));
-                    }
-                }
                 nav.skipped_records += 1;
+                read_other(rd, path, ln, &line, sys, lines, glo_orbit_lines, nav)?;
                 continue;
             }
         }
         let eph = read_gps_record(rd, path, ln, &line, v3)?;
         nav.gps.push(eph);
+    }
+    Ok(())
+}
+
+/// A record of another system than GPS (first line read): kept, or its remaining
+/// lines skipped and counted. `glo_lines`: GLONASS orbit lines (3 in 3.05, 4 in 4.00).
+#[allow(clippy::too_many_arguments)]
+fn read_other(
+    rd: &mut LineReader,
+    path: &Path,
+    ln: usize,
+    line: &[u8],
+    sys: u8,
+    lines: usize,
+    glo_lines: usize,
+    nav: &mut RinexNav,
+) -> Result<(), InputError> {
+    match sys {
+        b'E' => nav.galileo.push(other::galileo(rd, path, ln, line)?),
+        b'C' => nav.beidou.push(other::beidou(rd, path, ln, line)?),
+        b'R' => nav.glonass.push(other::glonass(
+            rd,
+            path,
+            ln,
+            line,
+            glo_lines,
+            nav.leap_seconds,
+        )?),
+        b'J' => nav.qzss.push(read_gps_record(rd, path, ln, line, true)?),
+        _ => {
+            skip_lines(rd, path, ln, sys, lines)?;
+            if sys == b'S' {
+                nav.skipped.sbas += 1;
+            } else {
+                nav.skipped.navic += 1;
+            }
+        }
+    }
+    Ok(())
+}
+
+fn skip_lines(
+    rd: &mut LineReader,
+    path: &Path,
+    ln: usize,
+    sys: u8,
+    lines: usize,
+) -> Result<(), InputError> {
+    for _ in 1..lines {
+        if rd.next_line()?.is_none() {
+            return Err(InputError::at_line(
+                path,
+                ln,
+                format!(
+                    "record truncated: a '{}' record has {lines} lines",
+                    sys as char
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// RINEX 4.00 records: a `> TYPE SAT MESSAGE` line (4.00 §4, Table A1), then the
+/// record. LNAV (GPS, QZSS), INAV/FNAV, D1/D2 and FDMA are read; other ephemeris
+/// messages, STO and EOP are skipped and counted; ION gives Klobuchar / NeQuick-G
+/// coefficients when the header had none.
+fn read_records_v4(rd: &mut LineReader, path: &Path, nav: &mut RinexNav) -> Result<(), InputError> {
+    while let Some((ln, l)) = rd.next_line()? {
+        let head = l.to_vec();
+        if trim(&head).is_empty() {
+            continue;
+        }
+        if head.first() != Some(&b'>') {
+            return Err(InputError::at_field(
+                path,
+                ln,
+                "record type",
+                format!(
+                    "expected a '> EPH', '> STO', '> EOP' or '> ION' line, found \"{}\"",
+                    crate::error::shorten(cols(&head, 0, 20))
+                ),
+            ));
+        }
+        let kind = trim(cols(&head, 2, 5)).to_vec();
+        let sys = cols(&head, 6, 7).first().copied().unwrap_or(b' ');
+        let msg = trim(cols(&head, 10, 15)).to_vec();
+        let Some(lines) = other::v4_record_lines(&kind, sys, &msg) else {
+            return Err(InputError::at_field(
+                path,
+                ln,
+                "record type",
+                format!(
+                    "unknown record \"{}\" (RINEX 4.00 Table A1)",
+                    crate::error::shorten(trim(&head))
+                ),
+            ));
+        };
+        nav.skipped_records += usize::from(!(kind == b"EPH" && sys == b'G' && msg == b"LNAV"));
+        match kind.as_slice() {
+            b"EPH" => {
+                let (n, first) = match rd.next_line()? {
+                    Some((n, f)) => (n, f.to_vec()),
+                    None => {
+                        return Err(InputError::at_line(
+                            path,
+                            ln,
+                            "record missing after its '>' line",
+                        ))
+                    }
+                };
+                let known = matches!(
+                    (sys, msg.as_slice()),
+                    (b'G' | b'J', b"LNAV") | (b'E', _) | (b'C', b"D1" | b"D2") | (b'R', _)
+                );
+                if sys == b'G' && known {
+                    nav.gps.push(read_gps_record(rd, path, n, &first, true)?);
+                } else if known {
+                    read_other(rd, path, n, &first, sys, lines, 4, nav)?;
+                } else {
+                    skip_lines(rd, path, n, sys, lines)?;
+                    if sys == b'S' {
+                        nav.skipped.sbas += 1;
+                    } else if sys == b'I' {
+                        nav.skipped.navic += 1;
+                    } else {
+                        nav.skipped.other_messages += 1;
+                    }
+                }
+            }
+            b"ION" => {
+                let v = other::ion_numbers(rd, path, ln, lines)?;
+                let kl = || {
+                    let a = [v[0], v[1], v[2], v[3]];
+                    let b = [v[4], v[5], v[6], v[7]];
+                    (a, b)
+                };
+                let slot_free = match (sys, msg.as_slice()) {
+                    (b'G', b"LNAV") if nav.iono_alpha.is_none() => {
+                        let (a, b) = kl();
+                        nav.iono_alpha = Some(a);
+                        nav.iono_beta = Some(b);
+                        true
+                    }
+                    (b'J', b"LNAV") if nav.iono.qzss_klobuchar.is_none() => {
+                        nav.iono.qzss_klobuchar = Some(kl());
+                        true
+                    }
+                    (b'C', b"D1D2") if nav.iono.beidou_klobuchar.is_none() => {
+                        nav.iono.beidou_klobuchar = Some(kl());
+                        true
+                    }
+                    (b'E', b"IFNV") if nav.iono.galileo_nequick.is_none() => {
+                        nav.iono.galileo_nequick = Some([v[0], v[1], v[2]]);
+                        true
+                    }
+                    _ => false,
+                };
+                nav.skipped.ion += usize::from(!slot_free);
+            }
+            _ => {
+                for _ in 0..lines {
+                    if rd.next_line()?.is_none() {
+                        return Err(InputError::at_line(path, ln, "record truncated"));
+                    }
+                }
+                nav.skipped.sto_eop += 1;
+            }
+        }
     }
     Ok(())
 }
@@ -528,29 +793,12 @@ fn read_gps_record(
     };
     // Fit interval in hours (3.04 Table A6); 0 or a 0/1 flag value means 4 h.
     let fit_interval_h = if f[25] >= 4.0 { f[25] } else { 4.0 };
-    Ok(GpsEphemeris {
-        prn: prn as u8,
+    let eph = GpsEphemeris {
         toc,
         af0_s: af0,
         af1_s_per_s: af1,
         af2_s_per_s2: af2,
         iode,
-        crs_m: f[1],
-        delta_n_rad_per_s: f[2],
-        m0_rad: f[3],
-        cuc_rad: f[4],
-        e,
-        cus_rad: f[6],
-        sqrt_a_sqrt_m: f[7],
-        toe,
-        cic_rad: f[9],
-        omega0_rad: f[10],
-        cis_rad: f[11],
-        i0_rad: f[12],
-        crc_m: f[13],
-        omega_rad: f[14],
-        omega_dot_rad_per_s: f[15],
-        idot_rad_per_s: f[16],
         codes_l2: f[17],
         l2p_flag: f[19],
         sv_accuracy_m: f[20],
@@ -559,7 +807,33 @@ fn read_gps_record(
         iodc,
         transmission_time,
         fit_interval_h,
-    })
+        ..GpsEphemeris::zeroed(prn as u8, toe)
+    };
+    Ok(eph.with_orbit(&kepler_from_fields(&f)))
+}
+
+/// The Keplerian elements from orbit fields 1-16 of the common RINEX layout
+/// (GPS Table A6, Galileo A8, QZSS A12, BeiDou A14: Crs, Delta n, M0, Cuc, e, Cus,
+/// sqrt(A), toe, Cic, Omega0, Cis, i0, Crc, omega, Omega dot, IDOT).
+pub(crate) fn kepler_from_fields(f: &[f64]) -> KeplerOrbit {
+    KeplerOrbit {
+        crs_m: f[1],
+        delta_n_rad_per_s: f[2],
+        m0_rad: f[3],
+        cuc_rad: f[4],
+        e: f[5],
+        cus_rad: f[6],
+        sqrt_a_sqrt_m: f[7],
+        toe_sow_s: f[8],
+        cic_rad: f[9],
+        omega0_rad: f[10],
+        cis_rad: f[11],
+        i0_rad: f[12],
+        crc_m: f[13],
+        omega_rad: f[14],
+        omega_dot_rad_per_s: f[15],
+        idot_rad_per_s: f[16],
+    }
 }
 
 /// A number as a Fortran-style `D19.12` field written with `E` (RINEX 3.04 §6.7 allows

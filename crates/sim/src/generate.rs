@@ -240,6 +240,7 @@ pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError>
                 leap_seconds: Some(18),
                 skipped_records: 0,
                 warnings: Vec::new(),
+                ..RinexNav::default()
             };
             let p = out_dir.join("nav.rnx");
             let mut w = BufWriter::new(File::create(&p).map_err(|e| InputError::create(&p, &e))?);

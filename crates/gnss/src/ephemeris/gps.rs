@@ -5,24 +5,21 @@
 //! Table A4 gives "radians"; the navigation message itself uses semicircles, which a
 //! decoder multiplies by pi before filling this struct).
 
+use super::kepler::{KeplerConstants, KeplerOrbit, GPS_CONSTANTS};
 use crate::time::{wrap_half_week, GpsTime};
 use nalgebra::Vector3;
 
 /// WGS-84 gravitational constant as used by GPS, mu [m^3/s^2] (IS-GPS-200 Table 20-IV).
-pub const GPS_MU_M3_PER_S2: f64 = 3.986_005e14;
+pub const GPS_MU_M3_PER_S2: f64 = GPS_CONSTANTS.mu_m3_per_s2;
 /// WGS-84 Earth rotation rate as used by GPS [rad/s] (IS-GPS-200 Table 20-IV).
-pub const GPS_OMEGA_E_RAD_PER_S: f64 = 7.292_115_146_7e-5;
+pub const GPS_OMEGA_E_RAD_PER_S: f64 = GPS_CONSTANTS.omega_e_rad_per_s;
 /// Relativistic constant F = -2 sqrt(mu)/c^2 [s/sqrt(m)] (IS-GPS-200 20.3.3.3.3.1).
-pub const GPS_F_S_PER_SQRT_M: f64 = -4.442_807_633e-10;
+pub const GPS_F_S_PER_SQRT_M: f64 = GPS_CONSTANTS.f_s_per_sqrt_m;
 /// Speed of light [m/s] (IS-GPS-200 20.3.4.3).
 pub const SPEED_OF_LIGHT_MPS: f64 = 299_792_458.0;
 /// pi exactly as IS-GPS-200 20.3.3.4.3 specifies it for semicircle conversion.
 #[allow(clippy::approx_constant)] // the ICD's truncated value, on purpose
 pub const GPS_PI: f64 = 3.141_592_653_589_8;
-
-/// Convergence limit of the Kepler iteration [rad].
-const KEPLER_TOL_RAD: f64 = 1e-13;
-const KEPLER_MAX_ITER: usize = 30;
 
 /// One GPS LNAV broadcast ephemeris (subframes 1-3), units SI, angles radians.
 #[derive(Clone, Debug, PartialEq)]
@@ -105,21 +102,6 @@ pub struct SatState {
     pub relativistic_s: f64,
 }
 
-/// Eccentric anomaly from mean anomaly by Newton iteration (IS-GPS-200 Table 20-IV,
-/// Kepler's equation M = E - e sin E) to 1e-13 rad.
-pub(crate) fn solve_kepler(m_rad: f64, e: f64) -> f64 {
-    let mut ek = m_rad;
-    for _ in 0..KEPLER_MAX_ITER {
-        let f = ek - e * ek.sin() - m_rad;
-        let d = f / (1.0 - e * ek.cos());
-        ek -= d;
-        if d.abs() < KEPLER_TOL_RAD {
-            break;
-        }
-    }
-    ek
-}
-
 impl GpsEphemeris {
     /// A healthy ephemeris with every field zero except `prn`, `toc` and `toe`.
     pub fn zeroed(prn: u8, toe: GpsTime) -> Self {
@@ -176,67 +158,67 @@ impl GpsEphemeris {
         (bias, drift)
     }
 
+    /// The Keplerian elements (shared with QZSS, Galileo and BeiDou: `kepler`).
+    pub fn orbit(&self) -> KeplerOrbit {
+        KeplerOrbit {
+            sqrt_a_sqrt_m: self.sqrt_a_sqrt_m,
+            e: self.e,
+            i0_rad: self.i0_rad,
+            omega0_rad: self.omega0_rad,
+            omega_rad: self.omega_rad,
+            m0_rad: self.m0_rad,
+            delta_n_rad_per_s: self.delta_n_rad_per_s,
+            omega_dot_rad_per_s: self.omega_dot_rad_per_s,
+            idot_rad_per_s: self.idot_rad_per_s,
+            cuc_rad: self.cuc_rad,
+            cus_rad: self.cus_rad,
+            crc_m: self.crc_m,
+            crs_m: self.crs_m,
+            cic_rad: self.cic_rad,
+            cis_rad: self.cis_rad,
+            toe_sow_s: self.toe.sow,
+        }
+    }
+
+    /// This ephemeris with the Keplerian elements of `o` (its `toe_sow_s` is not
+    /// used: `toe` carries the week too).
+    pub fn with_orbit(mut self, o: &KeplerOrbit) -> Self {
+        self.sqrt_a_sqrt_m = o.sqrt_a_sqrt_m;
+        self.e = o.e;
+        self.i0_rad = o.i0_rad;
+        self.omega0_rad = o.omega0_rad;
+        self.omega_rad = o.omega_rad;
+        self.m0_rad = o.m0_rad;
+        self.delta_n_rad_per_s = o.delta_n_rad_per_s;
+        self.omega_dot_rad_per_s = o.omega_dot_rad_per_s;
+        self.idot_rad_per_s = o.idot_rad_per_s;
+        self.cuc_rad = o.cuc_rad;
+        self.cus_rad = o.cus_rad;
+        self.crc_m = o.crc_m;
+        self.crs_m = o.crs_m;
+        self.cic_rad = o.cic_rad;
+        self.cis_rad = o.cis_rad;
+        self
+    }
+
     /// Position, velocity and clock at GPST t in the ECEF frame at t
     /// (IS-GPS-200 Table 20-IV; velocity by the analytic time derivative of each step).
     pub fn sat_state(&self, t: GpsTime) -> SatState {
-        let a = self.sqrt_a_sqrt_m * self.sqrt_a_sqrt_m;
-        let n0 = (GPS_MU_M3_PER_S2 / (a * a * a)).sqrt();
+        self.sat_state_with(&GPS_CONSTANTS, t)
+    }
+
+    /// [`Self::sat_state`] with another system's constants (QZSS LNAV: IS-QZSS-PNT
+    /// §4.1.2, the same algorithm; t and the message's times in the same time scale).
+    pub fn sat_state_with(&self, k: &KeplerConstants, t: GpsTime) -> SatState {
+        let orbit = self.orbit();
         let tk = wrap_half_week(t.diff_s(&self.toe));
-        let n = n0 + self.delta_n_rad_per_s;
-        let mk = self.m0_rad + n * tk;
-        let ek = solve_kepler(mk, self.e);
-        let (sin_e, cos_e) = ek.sin_cos();
-        let one_m_ecos = 1.0 - self.e * cos_e;
-        let sq1me2 = (1.0 - self.e * self.e).sqrt();
-        // True anomaly and argument of latitude (Table 20-IV).
-        let vk = (sq1me2 * sin_e).atan2(cos_e - self.e);
-        let phik = vk + self.omega_rad;
-        let (s2p, c2p) = (2.0 * phik).sin_cos();
-        let duk = self.cus_rad * s2p + self.cuc_rad * c2p;
-        let drk = self.crs_m * s2p + self.crc_m * c2p;
-        let dik = self.cis_rad * s2p + self.cic_rad * c2p;
-        let uk = phik + duk;
-        let rk = a * one_m_ecos + drk;
-        let ik = self.i0_rad + dik + self.idot_rad_per_s * tk;
-        let (sin_u, cos_u) = uk.sin_cos();
-        let xp = rk * cos_u;
-        let yp = rk * sin_u;
-        // Corrected longitude of the ascending node, ECEF at t.
-        let omega_dot_k = self.omega_dot_rad_per_s - GPS_OMEGA_E_RAD_PER_S;
-        let omk = self.omega0_rad + omega_dot_k * tk - GPS_OMEGA_E_RAD_PER_S * self.toe.sow;
-        let (sin_o, cos_o) = omk.sin_cos();
-        let (sin_i, cos_i) = ik.sin_cos();
-        let pos = Vector3::new(
-            xp * cos_o - yp * cos_i * sin_o,
-            xp * sin_o + yp * cos_i * cos_o,
-            yp * sin_i,
-        );
-
-        // Time derivatives of each quantity above.
-        let ek_dot = n / one_m_ecos;
-        let phik_dot = sq1me2 * ek_dot / one_m_ecos; // dv/dt
-        let uk_dot = phik_dot * (1.0 + 2.0 * (self.cus_rad * c2p - self.cuc_rad * s2p));
-        let rk_dot =
-            a * self.e * sin_e * ek_dot + 2.0 * phik_dot * (self.crs_m * c2p - self.crc_m * s2p);
-        let ik_dot =
-            self.idot_rad_per_s + 2.0 * phik_dot * (self.cis_rad * c2p - self.cic_rad * s2p);
-        let xp_dot = rk_dot * cos_u - yp * uk_dot;
-        let yp_dot = rk_dot * sin_u + xp * uk_dot;
-        let vel = Vector3::new(
-            xp_dot * cos_o - yp_dot * cos_i * sin_o + yp * sin_i * sin_o * ik_dot
-                - pos.y * omega_dot_k,
-            xp_dot * sin_o + yp_dot * cos_i * cos_o - yp * sin_i * cos_o * ik_dot
-                + pos.x * omega_dot_k,
-            yp_dot * sin_i + yp * cos_i * ik_dot,
-        );
-
+        let s = orbit.state(k, tk, false);
         // Clock (20.3.3.3.3.1): polynomial + relativistic F e sqrt(A) sin Ek.
-        let rel = GPS_F_S_PER_SQRT_M * self.e * self.sqrt_a_sqrt_m * sin_e;
-        let rel_dot = GPS_F_S_PER_SQRT_M * self.e * self.sqrt_a_sqrt_m * cos_e * ek_dot;
+        let (rel, rel_dot) = orbit.relativistic(k, &s);
         let (poly, poly_dot) = self.clock_poly(t);
         SatState {
-            pos_ecef_m: pos,
-            vel_ecef_mps: vel,
+            pos_ecef_m: s.pos_ecef_m,
+            vel_ecef_mps: s.vel_ecef_mps,
             clock_bias_s: poly + rel,
             clock_drift_s_per_s: poly_dot + rel_dot,
             relativistic_s: rel,
@@ -283,18 +265,6 @@ pub(crate) mod tests {
             transmission_time: Some(GpsTime::new(2381, 408_756.0)),
             fit_interval_h: 4.0,
         }
-    }
-
-    #[test]
-    fn kepler_solution_satisfies_equation() {
-        for &e in &[0.0, 0.001, 0.02, 0.3, 0.9] {
-            for k in 0..64 {
-                let m = -7.0 + 0.23 * f64::from(k);
-                let ek = solve_kepler(m, e);
-                assert!((ek - e * ek.sin() - m).abs() < 1e-12, "e={e} M={m}");
-            }
-        }
-        assert_eq!(solve_kepler(1.25, 0.0), 1.25);
     }
 
     #[test]
