@@ -42,6 +42,7 @@ use self::v3::read_v3_body;
 use crate::error::InputError;
 use std::path::Path;
 
+mod crx;
 mod fields;
 #[cfg(test)]
 mod tests;
@@ -51,17 +52,21 @@ mod writer;
 
 pub use writer::{ssi_from_cn0, ObsHeader, RinexObsWriter};
 
-pub use navfuse_gnss::obs::{ObsEpoch, SatObs};
+pub use crx::crx_to_rinex;
+pub use navfuse_gnss::obs::{
+    MultiObsEpoch, ObsEpoch, ObsSignalsHeader, ObsValue, SatObs, SatSignals,
+};
 
-/// Read the GPS L1 C/A observations of a RINEX 2.10/2.11 or 3.0x observation file;
-/// the version is taken from the `RINEX VERSION / TYPE` line. See the module
-/// documentation for what is kept and skipped.
+/// Read the GPS L1 C/A observations of a RINEX 2.xx, 3.0x or 4.0x observation file
+/// (plain, gzip or Compact RINEX); the version is taken from the `RINEX VERSION /
+/// TYPE` line. The GPS L1 C/A view ([`MultiObsEpoch::gps_l1ca`]) of
+/// [`read_rinex_obs_all`].
 /// Warnings (a damaged last epoch dropped) are left out: see [`read_rinex_obs_report`].
 pub fn read_rinex_obs(path: &Path) -> Result<Vec<ObsEpoch>, InputError> {
     read_rinex_obs_report(path).map(|r| r.epochs)
 }
 
-/// What an observation file gave.
+/// What an observation file gave (GPS L1 C/A view).
 #[derive(Clone, Debug, PartialEq)]
 pub struct RinexObsRead {
     pub epochs: Vec<ObsEpoch>,
@@ -69,27 +74,57 @@ pub struct RinexObsRead {
     pub warnings: Vec<String>,
 }
 
+/// Every system and signal of an observation file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RinexObsAll {
+    pub header: ObsSignalsHeader,
+    pub epochs: Vec<MultiObsEpoch>,
+    /// Findings that did not stop the read: a damaged last epoch dropped.
+    pub warnings: Vec<String>,
+}
+
+/// What a version's body reader fills: the header's signals, the epochs, and
+/// whether the records had started (for the cut-last-line warning).
+#[derive(Default)]
+pub(super) struct BodyOut {
+    header: ObsSignalsHeader,
+    epochs: Vec<MultiObsEpoch>,
+    records: bool,
+}
+
 /// [`read_rinex_obs`] with its warnings. A last epoch cut by the end of the file (a
 /// log cut mid-write) is dropped with a warning; damage elsewhere is an error.
 pub fn read_rinex_obs_report(path: &Path) -> Result<RinexObsRead, InputError> {
+    let all = read_rinex_obs_all(path)?;
+    Ok(RinexObsRead {
+        epochs: all.epochs.iter().map(MultiObsEpoch::gps_l1ca).collect(),
+        warnings: all.warnings,
+    })
+}
+
+/// Read every system and signal of a RINEX 2.xx, 3.0x or 4.0x observation file,
+/// plain, gzip or Compact RINEX 1.0 / 3.0.
+pub fn read_rinex_obs_all(path: &Path) -> Result<RinexObsAll, InputError> {
     let (mut rd, ln, version) = open_obs(path)?;
     let body = if version.floor() == 2.0 {
         read_v2_body
-    } else if version.floor() == 3.0 {
+    } else if version.floor() == 3.0 || version.floor() == 4.0 {
         read_v3_body
     } else {
-        return Err(unsupported(path, ln, version, "2.10, 2.11 and 3.0x are"));
+        return Err(unsupported(path, ln, version, "2.xx, 3.0x and 4.0x are"));
     };
-    let mut out = RinexObsRead {
-        epochs: Vec::new(),
-        warnings: Vec::new(),
-    };
-    let mut records = false;
-    match body(&mut rd, path, &mut out.epochs, &mut records) {
+    let mut b = BodyOut::default();
+    let mut warnings = Vec::new();
+    match body(&mut rd, path, version, &mut b) {
         Ok(()) => {}
-        Err(e) if records && rd.cut_last_line() => out.warnings.push(e.last_line_warning()),
+        Err(e) if b.records && rd.cut_last_line() => warnings.push(e.last_line_warning()),
         Err(e) => return Err(e),
     }
+    let out = RinexObsAll {
+        header: b.header,
+        epochs: b.epochs,
+        warnings,
+    };
     for (k, w) in out.epochs.windows(2).enumerate() {
         if w[1].t.diff_s(&w[0].t) < 0.0 {
             return Err(InputError::new(
@@ -109,19 +144,19 @@ pub fn read_rinex_obs_report(path: &Path) -> Result<RinexObsRead, InputError> {
     Ok(out)
 }
 
-/// Read the GPS C1C/L1C/D1C/S1C observations of a RINEX 3.0x observation file. Other
-/// versions are refused; [`read_rinex_obs`] also reads RINEX 2.10/2.11.
+/// Read the GPS C1C/L1C/D1C/S1C observations of a RINEX 3.0x / 4.0x observation
+/// file. Other versions are refused; [`read_rinex_obs`] also reads RINEX 2.10/2.11.
 pub fn read_rinex3_obs(path: &Path) -> Result<Vec<ObsEpoch>, InputError> {
     let (mut rd, ln, version) = open_obs(path)?;
-    if version.floor() != 3.0 {
+    if version.floor() != 3.0 && version.floor() != 4.0 {
         return Err(unsupported(
             path,
             ln,
             version,
-            "3.0x is; read_rinex_obs also reads 2.10/2.11",
+            "3.0x and 4.0x are; read_rinex_obs also reads 2.10/2.11",
         ));
     }
-    let mut out = Vec::new();
-    read_v3_body(&mut rd, path, &mut out, &mut false)?;
-    Ok(out)
+    let mut b = BodyOut::default();
+    read_v3_body(&mut rd, path, version, &mut b)?;
+    Ok(b.epochs.iter().map(MultiObsEpoch::gps_l1ca).collect())
 }
