@@ -261,7 +261,10 @@ fn v2_sat_list(
                 ),
             ));
         }
-        while k < n.min((k / 12 + 1) * 12) {
+        // This line's satellites (the bound fixed before the loop: more than 24
+        // satellites take three or more lines).
+        let end = n.min((k / 12 + 1) * 12);
+        while k < end {
             sats.push(v2_sat(path, cln, cl, k, n)?);
             k += 1;
         }
