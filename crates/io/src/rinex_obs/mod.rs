@@ -1,24 +1,26 @@
-//! RINEX observation files, GPS L1 C/A only: pseudorange (m), carrier phase (cycles)
-//! with its loss-of-lock indicator, Doppler (Hz) and C/N0 (dB-Hz).
+//! RINEX observation files of every system and signal: code (m), carrier phase
+//! (cycles), Doppler (Hz), signal strength (dB-Hz), each with its LLI and SSI digits,
+//! named by RINEX 3 observation codes (docs/FORMATS.md "RINEX observation files").
 //!
 //! Writer: [`RinexObsWriter`] produces a GPS-only RINEX 3.04 file (§5.2 header, §5.3
 //! epoch records: F14.3 value, LLI digit, SSI digit per observation; blank fields when
 //! absent) with C1C, L1C, D1C, S1C.
 //!
-//! Readers: [`read_rinex_obs`] takes the version from `RINEX VERSION / TYPE` and reads
-//! RINEX 2.10/2.11 (any 2.xx) and 3.0x files of any system mix; [`read_rinex3_obs`]
-//! reads 3.0x only. Both give the same [`ObsEpoch`]s for the same content. Other
-//! systems' satellites and other observation types are skipped; epochs with flag 0
-//! (OK) or 1 (power failure since the previous epoch) are kept, flags 2-5 (events,
-//! with the header/comment records they announce) and 6 (cycle-slip records) are
-//! skipped.
+//! Readers: [`read_rinex_obs_all`] takes the version from `RINEX VERSION / TYPE` and
+//! reads RINEX 2.xx, 3.0x and 4.0x files of any system mix, plain, gzip or Compact
+//! RINEX 1.0 / 3.0 (`crx.rs`), into [`MultiObsEpoch`]s with the header's signals
+//! ([`ObsSignalsHeader`]). [`read_rinex_obs`] / [`read_rinex3_obs`] (3.0x/4.0x only)
+//! give its GPS L1 C/A view ([`ObsEpoch`]: C1C, L1C + LLI, D1C, S1C), what the GPS
+//! path reads. Epochs with flag 0 (OK) or 1 (power failure since the previous epoch)
+//! are kept, flags 2-5 (events, with the header/comment records they announce) and 6
+//! (cycle-slip records) are skipped.
 //!
-//! - 3.0x: C1C, L1C, D1C, S1C, found by their position in the GPS `SYS / # / OBS
-//!   TYPES` list; one line per satellite (`G05` + 16 columns per observation).
-//! - 2.xx: C1, L1, D1, S1, found by their position in `# / TYPES OF OBSERV` (`I6`
-//!   count, 9 types per line, continuation lines with a blank count). P1 is never used
-//!   for the pseudorange: it is the P(Y) code, which differs from C/A by the P1-C1
-//!   code bias, so a file with P1 but no C1 gives no pseudoranges. Epoch line
+//! - 3.0x / 4.0x (`v3.rs`): every type of each system's `SYS / # / OBS TYPES` list;
+//!   one line per satellite (`G05` + 16 columns per observation); `GLONASS SLOT /
+//!   FRQ #` and `SYS / PHASE SHIFT` are read.
+//! - 2.xx (`v2.rs`): every type of `# / TYPES OF OBSERV` (`I6` count, 9 types per
+//!   line, continuation lines with a blank count), mapped to RINEX 3 codes per system
+//!   (P1 is C1W for GPS: never the L1 C/A pseudorange). Epoch line
 //!   ` yy mm dd hh mm ss.sssssss  f nnn` + 12 satellites (`A1,I2`; a blank system is
 //!   GPS) + receiver clock offset (F12.9, columns 69-80); more than 12 satellites
 //!   continue on lines starting with 32 blanks. Two-digit years 80-99 are 1980-1999,
@@ -26,15 +28,13 @@
 //!   (F14.3, LLI, SSI); trailing blanks may be missing. An event with flag 3 or 4 may
 //!   carry a new `# / TYPES OF OBSERV` list, which applies from the next epoch on.
 //!   Flag 6 skips the satellite list and one observation record per satellite.
-//! - The LLI digit of L1/L1C is kept as written: in 2.xx bit 1 means "opposite
-//!   wavelength factor" and bit 2 "under anti-spoofing", in 3.0x bit 1 is a
-//!   half-cycle ambiguity and bit 2 BOC tracking; bit 0 (lost lock) is the same. SSI
-//!   digits are not read; S1 is taken as dB-Hz (RINEX 2 leaves the unit to the
-//!   receiver).
+//! - LLI digits are kept as written: in 2.xx bit 1 means "opposite wavelength factor"
+//!   and bit 2 "under anti-spoofing", in 3.0x bit 1 is a half-cycle ambiguity and bit
+//!   2 BOC tracking; bit 0 (lost lock) is the same. S types are taken as dB-Hz
+//!   (RINEX 2 leaves the unit to the receiver).
 //! - Errors name the file, the line and the field and say what was expected
 //!   (`obs.11o:14: field 'G05 C1': expected a number, found "2057x396.770"`); truncated
 //!   lines read as blank fields, a truncated record is an error at its epoch line.
-//!   Hatanaka-compressed (CRINEX) files are refused with a hint.
 
 use self::fields::{open_obs, unsupported};
 use self::v2::read_v2_body;
