@@ -21,7 +21,7 @@ pub const MAX_LINE_BYTES: usize = 1 << 20;
 /// Reads a text file line by line into a reused buffer.
 pub struct LineReader {
     path: PathBuf,
-    reader: BufReader<File>,
+    reader: Box<dyn BufRead + Send>,
     buf: Vec<u8>,
     line_no: usize,
     /// The line last returned ended with `\n`.
@@ -37,13 +37,22 @@ impl LineReader {
                 return Err(InputError::new(path, "cannot open: is a directory"));
             }
         }
-        Ok(LineReader {
+        Ok(LineReader::from_reader(
+            path,
+            Box::new(BufReader::with_capacity(BUF_CAPACITY, file)),
+        ))
+    }
+
+    /// Lines of any byte stream (a gzip or Compact RINEX decoder), named `path` in
+    /// errors.
+    pub fn from_reader(path: &Path, reader: Box<dyn BufRead + Send>) -> Self {
+        LineReader {
             path: path.to_path_buf(),
-            reader: BufReader::with_capacity(BUF_CAPACITY, file),
+            reader,
             buf: Vec::with_capacity(256),
             line_no: 0,
             line_end: true,
-        })
+        }
     }
 
     /// The file.

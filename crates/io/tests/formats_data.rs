@@ -4,12 +4,15 @@
 
 use nalgebra::Vector3;
 use navfuse_core::{ImuErrors, ImuSample, NavState};
+use navfuse_gnss::System;
 use navfuse_io::gnss::read_gnss;
 use navfuse_io::imu::open_imu;
 use navfuse_io::input::{GnssFormat, GnssSource, ImuFormat, ImuSource, RtklibExplorerImuOptions};
 use navfuse_io::nav::{read_nav, CsvWriter, ImuErrWriter, NavWriter, SolutionRecord, StdWriter};
+use navfuse_io::rinex_obs::{read_rinex_obs, read_rinex_obs_all, RinexObsAll};
 use navfuse_io::time::week_sow_to_calendar;
 use navfuse_io::timetag::read_timetag;
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -482,4 +485,175 @@ fn speed_write_kfgins_outputs() {
          {best_cpu:.3} s CPU"
     );
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+// ---- Multi-system observations (issue 19) ----
+
+/// Observations per system and code.
+fn counts(r: &RinexObsAll) -> BTreeMap<(char, String), usize> {
+    let mut m = BTreeMap::new();
+    for e in &r.epochs {
+        for s in &e.sats {
+            for (c, v) in &s.signals {
+                if v.value.is_some() {
+                    *m.entry((s.sat.system.letter(), c.to_string())).or_insert(0) += 1;
+                }
+            }
+        }
+    }
+    m
+}
+
+#[test]
+fn esbc_full_day_crx_gz_equals_the_3h_rinex() {
+    let dir = "igs/ESBC00DNK_2020177";
+    let (Some(plain), Some(crx)) = (
+        data(&format!("{dir}/ESBC00DNK_R_20201770000_03H_30S_MO.rnx")),
+        data(&format!("{dir}/ESBC00DNK_R_20201770000_01D_30S_MO.crx.gz")),
+    ) else {
+        return;
+    };
+    let t0 = Instant::now();
+    let day = read_rinex_obs_all(&crx).expect("full day crx.gz");
+    let dt = t0.elapsed().as_secs_f64();
+    let mb = std::fs::metadata(&crx).unwrap().len() as f64 / 1e6;
+    println!(
+        "full day: {} epochs in {dt:.2} s: {:.0} epochs/s, {:.1} MB/s of .crx.gz",
+        day.epochs.len(),
+        day.epochs.len() as f64 / dt,
+        mb / dt
+    );
+    let three = read_rinex_obs_all(&plain).expect("3 h rnx");
+    assert_eq!(day.epochs.len(), 2880);
+    assert_eq!(three.epochs.len(), 360);
+    assert_eq!(day.header, three.header);
+    assert!(day.warnings.is_empty() && three.warnings.is_empty());
+    // Every satellite, every observation, LLI and SSI over the common epochs.
+    for (a, b) in three.epochs.iter().zip(&day.epochs) {
+        assert_eq!(a, b, "epoch {:?}", a.t);
+    }
+    let n_obs: usize = three
+        .epochs
+        .iter()
+        .flat_map(|e| &e.sats)
+        .map(|s| s.signals.len())
+        .sum();
+    println!("3 h: {n_obs} observations equal");
+    // The header's signals.
+    let sys: Vec<char> = day.header.types.iter().map(|(s, _)| s.letter()).collect();
+    assert_eq!(sys, ['C', 'E', 'G', 'J', 'R', 'S']);
+    assert_eq!(day.header.glonass_channel(2), Some(-4));
+    assert_eq!(day.header.glonass_channels.len(), 23);
+    assert_eq!(day.header.phase_shifts.len(), 22);
+    // The GPS L1 C/A view is the same through both paths.
+    let g3 = read_rinex_obs(&plain).unwrap();
+    assert_eq!(g3[..], read_rinex_obs(&crx).unwrap()[..360]);
+    for ((s, c), n) in counts(&three) {
+        println!("3 h {s} {c}: {n}");
+    }
+}
+
+#[test]
+fn walk_galileo_and_l2_are_read() {
+    let Some(p) = data("rtklibexplorer/walk_0827/derived_rinex/gnss_1730.obs") else {
+        return;
+    };
+    let r = read_rinex_obs_all(&p).unwrap();
+    let c = counts(&r);
+    for ((s, code), n) in &c {
+        println!("walk {s} {code}: {n}");
+    }
+    let get = |s: char, code: &str| c.get(&(s, code.to_string())).copied().unwrap_or(0);
+    assert!(get('E', "C1C") > 1000, "Galileo E1 read");
+    assert!(get('G', "C2L") > 1000, "GPS L2 read");
+    // The GPS L1 view equals what the L1-only reader gave: C1C values.
+    let l1 = read_rinex_obs(&p).unwrap();
+    let n_l1: usize = l1
+        .iter()
+        .flat_map(|e| &e.sats)
+        .filter(|s| s.pseudorange_m.is_some())
+        .count();
+    assert_eq!(n_l1, get('G', "C1C"));
+    let galileo_sats = r
+        .epochs
+        .iter()
+        .flat_map(|e| &e.sats)
+        .filter(|s| s.sat.system == System::Galileo)
+        .count();
+    assert!(galileo_sats > 0);
+}
+
+/// RTKLIB's `convbin` (Debian `rtklib`) writes the 3 h RINEX 3.05 file as mixed RINEX
+/// 2.11 (33+ satellites per epoch: three satellite-list lines; C1 P1 P2 C2 C5 ...);
+/// navfuse's RINEX 2 reader with its code mapping gives the same values as its
+/// RINEX 3 reader for the codes RTKLIB maps unambiguously.
+#[test]
+fn esbc_rinex2_from_convbin_matches_rinex3() {
+    let Some(plain) = data("igs/ESBC00DNK_2020177/ESBC00DNK_R_20201770000_03H_30S_MO.rnx") else {
+        return;
+    };
+    let dir = std::env::temp_dir().join(format!("navfuse_convbin_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let v2 = dir.join("esbc.obs");
+    let ok = std::process::Command::new("convbin")
+        .args(["-r", "rinex", "-v", "2.11", "-od", "-os", "-o"])
+        .arg(&v2)
+        .arg(&plain)
+        .output()
+        .map(|o| o.status.success())
+        .unwrap_or(false);
+    if !ok || !v2.exists() {
+        println!("skipped: RTKLIB convbin not available");
+        return;
+    }
+    let a = read_rinex_obs_all(&plain).unwrap();
+    let b = read_rinex_obs_all(&v2).unwrap();
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(a.epochs.len(), b.epochs.len());
+    // (system, RINEX 3 code in the 3.05 file, code navfuse maps RTKLIB's 2.11 type to)
+    let pairs = [
+        (System::Gps, "C1C", "C1C"),
+        (System::Gps, "C1W", "C1W"),
+        (System::Gps, "C2W", "C2W"),
+        (System::Gps, "D1C", "D1C"),
+        (System::Gps, "S1C", "S1C"),
+        (System::Glonass, "C1C", "C1C"),
+        (System::Glonass, "C2P", "C2P"),
+        (System::Galileo, "C1C", "C1X"),
+        (System::Galileo, "C5Q", "C5X"),
+    ];
+    let mut compared = 0;
+    for (ea, eb) in a.epochs.iter().zip(&b.epochs) {
+        assert_eq!(ea.t, eb.t);
+        for sb in &eb.sats {
+            let sa = ea
+                .sats
+                .iter()
+                .find(|s| s.sat == sb.sat)
+                .expect("same satellites");
+            for (sys, c3, c2) in pairs {
+                if sb.sat.system != sys {
+                    continue;
+                }
+                let va = sa
+                    .get(navfuse_gnss::ObsCode::parse(c3).unwrap())
+                    .and_then(|v| v.value);
+                let vb = sb
+                    .get(navfuse_gnss::ObsCode::parse(c2).unwrap())
+                    .and_then(|v| v.value);
+                assert_eq!(va, vb, "{} {c3} / {c2} at {:?}", sb.sat, eb.t);
+                compared += usize::from(va.is_some());
+            }
+        }
+        // The GPS L1 view alike, but for the LLI: convbin sets bit 0 where an arc starts
+        // (the first epoch, after a gap), the 3.05 file does not.
+        let no_lli = |e: &navfuse_io::rinex_obs::ObsEpoch| {
+            let mut e = e.clone();
+            e.sats.iter_mut().for_each(|s| s.lli = 0);
+            e
+        };
+        assert_eq!(no_lli(&ea.gps_l1ca()), no_lli(&eb.gps_l1ca()));
+    }
+    println!("convbin 2.11 vs 3.05: {compared} observations equal");
+    assert!(compared > 20000);
 }

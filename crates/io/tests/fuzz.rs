@@ -250,6 +250,32 @@ fn rinex_nav(p: &Path) -> Result<(), String> {
     Ok(())
 }
 
+/// Every system and signal (plain or Compact RINEX): times non-decreasing, values finite.
+fn rinex_obs_all(p: &Path) -> Result<(), String> {
+    let Ok(r) = navfuse_io::rinex_obs::read_rinex_obs_all(p) else {
+        return Ok(());
+    };
+    for w in r.epochs.windows(2) {
+        if w[1].t.diff_s(&w[0].t) < 0.0 {
+            return Err(format!(
+                "epoch time goes backwards: {:?} after {:?}",
+                w[1].t, w[0].t
+            ));
+        }
+    }
+    let values = r
+        .epochs
+        .iter()
+        .flat_map(|e| &e.sats)
+        .flat_map(|s| &s.signals);
+    for (code, v) in values {
+        if let Some(x) = v.value {
+            finite(code.as_str(), x)?;
+        }
+    }
+    Ok(())
+}
+
 fn rinex_obs(p: &Path) -> Result<(), String> {
     let Ok(r) = navfuse_io::rinex_obs::read_rinex_obs_report(p) else {
         return Ok(());
@@ -381,6 +407,12 @@ fn targets() -> Vec<Target> {
                 "crates/io/tests/data/walk_0827_3ep_v304.obs",
             ],
             rinex_obs,
+        ),
+        t(
+            "rinex_crx",
+            "crx",
+            &["crates/io/tests/data/esbc_3ep.crx"],
+            rinex_obs_all,
         ),
         t(
             "config_toml",

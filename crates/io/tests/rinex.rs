@@ -632,8 +632,8 @@ fn v2_errors_name_line_and_field() {
             ":46: field 'year': expected an integer, found \"\"",
         ),
         (
-            hand_edited("e15.obs", 1, |l| l.replacen("2.11", "4.00", 1)),
-            ":1: field 'RINEX version': version 4 is not supported (2.10, 2.11 and 3.0x are)",
+            hand_edited("e15.obs", 1, |l| l.replacen("2.11", "5.00", 1)),
+            ":1: field 'RINEX version': version 5 is not supported (2.xx, 3.0x and 4.0x are)",
         ),
         (
             hand_edited("e16.obs", 1, |l| l.replacen("OBSERVATION DATA", "NAVIGATION DATA ", 1)),
@@ -649,7 +649,8 @@ fn v2_errors_name_line_and_field() {
             hand_edited("e18.obs", 1, |l| {
                 format!("{:<60}CRINEX VERS   / TYPE", &l[..20])
             }),
-            ":1: Hatanaka-compressed (CRINEX) files are not supported",
+            // Compact RINEX is read now: a version it does not know is refused.
+            ":1: cannot read: Compact RINEX line 1: CRINEX version 2.11 (1.0 and 3.0 are read)",
         ),
     ];
     for (p, want) in &cases {
@@ -705,8 +706,8 @@ fn v2_errors_name_line_and_field() {
         .to_string();
     assert!(
         err.contains(
-            ":1: field 'RINEX version': version 2.11 is not supported (3.0x is; \
-                      read_rinex_obs also reads 2.10/2.11)"
+            ":1: field 'RINEX version': version 2.11 is not supported (3.0x and 4.0x \
+                      are; read_rinex_obs also reads 2.10/2.11)"
         ),
         "{err}"
     );

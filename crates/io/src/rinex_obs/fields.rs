@@ -1,9 +1,13 @@
 //! Fixed-column field parsers shared by the RINEX 2 and 3 readers, and the
 //! `RINEX VERSION / TYPE` check.
 
+use super::crx::CrxDecoder;
 use crate::error::InputError;
-use crate::fmt::LineReader;
+use crate::fmt::{LineReader, BUF_CAPACITY};
 use crate::rinex_nav::cols;
+use flate2::bufread::MultiGzDecoder;
+use std::fs::File;
+use std::io::{BufRead, BufReader};
 use std::path::Path;
 
 pub(super) fn text(b: &[u8]) -> String {
@@ -82,22 +86,43 @@ pub(super) fn lli_digit(path: &Path, ln: usize, name: &str, b: &[u8]) -> Result<
     }
 }
 
-/// Open an observation file and check its `RINEX VERSION / TYPE` line; returns the
-/// reader, the line number and the version.
+/// Open an observation file, plain, gzip (`1f 8b` magic, any name) or Compact RINEX
+/// 1.0 / 3.0 (first line `CRINEX VERS   / TYPE`, expanded by [`super::crx`]), and
+/// check its `RINEX VERSION / TYPE` line; returns the reader, the line number and the
+/// version. Line numbers of a Compact RINEX file are those of the expanded RINEX
+/// text; its decoding errors name the Compact RINEX line.
 pub(super) fn open_obs(path: &Path) -> Result<(LineReader, usize, f64), InputError> {
-    let mut rd = LineReader::open(path)?;
+    let file = File::open(path).map_err(|e| InputError::open(path, &e))?;
+    if file.metadata().map(|m| m.is_dir()).unwrap_or(false) {
+        return Err(InputError::new(path, "cannot open: is a directory"));
+    }
+    let mut raw = BufReader::with_capacity(BUF_CAPACITY, file);
+    let gz = raw
+        .fill_buf()
+        .map_err(|e| InputError::read(path, &e))?
+        .starts_with(&[0x1f, 0x8b]);
+    let mut bytes: Box<dyn BufRead + Send> = if gz {
+        Box::new(BufReader::with_capacity(
+            BUF_CAPACITY,
+            MultiGzDecoder::new(raw),
+        ))
+    } else {
+        Box::new(raw)
+    };
+    let head = bytes.fill_buf().map_err(|e| InputError::read(path, &e))?;
+    let first = head.split(|&c| c == b'\n').next().unwrap_or(&[]);
+    if text(cols(first, 60, 80)).starts_with("CRINEX VERS") {
+        bytes = Box::new(BufReader::with_capacity(
+            BUF_CAPACITY,
+            CrxDecoder::new(bytes),
+        ));
+    }
+    let mut rd = LineReader::from_reader(path, bytes);
     let (ln, first) = match rd.next_line()? {
         Some((ln, l)) => (ln, l.to_vec()),
         None => return Err(InputError::new(path, "empty file: expected a RINEX header")),
     };
     let label = text(cols(&first, 60, 80));
-    if label == "CRINEX VERS   / TYPE" || label == "CRINEX VERS / TYPE" {
-        return Err(InputError::at_line(
-            path,
-            ln,
-            "Hatanaka-compressed (CRINEX) files are not supported: expand them with CRX2RNX first",
-        ));
-    }
     if label != "RINEX VERSION / TYPE" {
         return Err(InputError::at_line(
             path,

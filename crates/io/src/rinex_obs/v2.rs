@@ -1,13 +1,16 @@
 //! The body of a RINEX 2.10/2.11 observation file: the `# / TYPES OF OBSERV` list,
 //! the satellite lists with continuation lines, and the records.
 
-use super::fields::{f64_field, f64_required, int_field, lli_digit, text};
-use super::{ObsEpoch, SatObs};
+use super::fields::{f64_field, f64_required, int_field, text};
+use super::v3::flag_digit;
+use super::BodyOut;
 use crate::error::InputError;
 use crate::fmt::LineReader;
 use crate::rinex_nav::cols;
+use navfuse_gnss::obs::{MultiObsEpoch, ObsValue, SatSignals};
 use navfuse_gnss::time::GpstCalendar;
 use navfuse_gnss::GpsTime;
+use navfuse_gnss::{ObsCode, SatId, System};
 use std::path::Path;
 
 /// Header label of the RINEX 2 observation type list.
@@ -71,36 +74,83 @@ impl V2Types {
             _ => Ok(()),
         }
     }
-
-    fn index(&self, name: &str) -> Option<usize> {
-        self.list.iter().position(|t| t == name)
-    }
 }
 
-/// Where the four GPS L1 C/A observables are in a RINEX 2 record.
+/// Where the observables are in a RINEX 2 record and their RINEX 3 codes per system.
 pub(super) struct V2Layout {
     /// Lines per satellite: 5 observations per line.
     lines_per_sat: usize,
-    /// Type index of C1, L1, D1, S1.
-    idx: [Option<usize>; 4],
+    /// The RINEX 2 type names, in order.
+    names: Vec<String>,
 }
-
-const V2_NAMES: [&str; 4] = ["C1", "L1", "D1", "S1"];
 
 impl V2Layout {
     fn new(types: &V2Types) -> Self {
         V2Layout {
             lines_per_sat: types.list.len().div_ceil(5),
-            idx: V2_NAMES.map(|n| types.index(n)),
+            names: types.list.clone(),
         }
+    }
+
+    /// The RINEX 3 code of each type for `system` (None: not mapped, skipped).
+    fn codes(&self, system: System) -> Vec<Option<ObsCode>> {
+        let has = |n: &str| self.names.iter().any(|t| t == n);
+        self.names
+            .iter()
+            .map(|t| v2_code(system, t, has("P2")))
+            .collect()
     }
 }
 
-/// One satellite of a RINEX 2 epoch: its text (`G05`) and its GPS PRN (None for other
-/// systems).
+/// The RINEX 3 code of RINEX 2 type `t` for `system` (docs/FORMATS.md "RINEX 2
+/// observation codes"; RINEX 3.05 §5.1 names the signals, RINEX 2.11 §5.1 the types):
+/// P1/P2 are GPS W (P(Y), semi-codeless) and GLONASS P; C1/L1/D1/S1 are C/A (C) for
+/// GPS, QZSS, SBAS and GLONASS and X for Galileo; GPS C2 is L2C (X) and L2/D2/S2 are
+/// W when the file has P2, X otherwise; GLONASS C2 is C, L2/D2/S2 P with P2, C
+/// otherwise; band 5 is X (SBAS I), Galileo 6/7/8 X, BeiDou 2/6/7 I.
+fn v2_code(system: System, t: &str, has_p2: bool) -> Option<ObsCode> {
+    let &[k, b] = t.as_bytes() else { return None };
+    let kind = match k {
+        b'C' | b'P' => b'C',
+        b'L' | b'D' | b'S' => k,
+        _ => return None,
+    };
+    use System::*;
+    let attr = match (system, k, b) {
+        (Gps | Qzss, b'P', b'1' | b'2') => b'W',
+        (Glonass, b'P', b'1' | b'2') => b'P',
+        (_, b'P', _) => return None,
+        (Gps | Qzss | Sbas | Glonass, _, b'1') => b'C',
+        (Galileo, _, b'1' | b'5' | b'6' | b'7' | b'8') => b'X',
+        (Gps | Qzss, b'C', b'2') => b'X',
+        (Gps | Qzss, _, b'2') => {
+            if has_p2 {
+                b'W'
+            } else {
+                b'X'
+            }
+        }
+        (Glonass, b'C', b'2') => b'C',
+        (Glonass, _, b'2') => {
+            if has_p2 {
+                b'P'
+            } else {
+                b'C'
+            }
+        }
+        (Gps | Qzss, _, b'5') => b'X',
+        (Sbas, _, b'5') => b'I',
+        (BeiDou, _, b'2' | b'6' | b'7') => b'I',
+        _ => return None,
+    };
+    Some(ObsCode([kind, b, attr]))
+}
+
+/// One satellite of a RINEX 2 epoch: its text (`G05`) and its identity (None for a
+/// system letter navfuse does not know; its records are skipped).
 pub(super) struct V2Sat {
     id: String,
-    gps_prn: Option<u8>,
+    sat: Option<SatId>,
 }
 
 /// Parse satellite `k` (0-based) of `n` in an epoch line or continuation line:
@@ -159,12 +209,15 @@ fn v2_sat(path: &Path, ln: usize, line: &[u8], k: usize, n: usize) -> Result<V2S
         }
         Ok(V2Sat {
             id: format!("G{prn:02}"),
-            gps_prn: Some(prn),
+            sat: Some(SatId::gps(prn)),
         })
     } else {
+        let sat = System::from_letter(sys as char)
+            .filter(|_| prn > 0)
+            .map(|s| SatId::new(s, prn));
         Ok(V2Sat {
             id: String::from_utf8_lossy(id).into_owned(),
-            gps_prn: None,
+            sat,
         })
     }
 }
@@ -208,7 +261,10 @@ fn v2_sat_list(
                 ),
             ));
         }
-        while k < n.min((k / 12 + 1) * 12) {
+        // This line's satellites (the bound fixed before the loop: more than 24
+        // satellites take three or more lines).
+        let end = n.min((k / 12 + 1) * 12);
+        while k < end {
             sats.push(v2_sat(path, cln, cl, k, n)?);
             k += 1;
         }
@@ -240,8 +296,8 @@ fn skip_lines(
 pub(super) fn read_v2_body(
     rd: &mut LineReader,
     path: &Path,
-    out: &mut Vec<ObsEpoch>,
-    records: &mut bool,
+    version: f64,
+    out: &mut BodyOut,
 ) -> Result<(), InputError> {
     let mut types = V2Types::default();
     loop {
@@ -265,8 +321,14 @@ pub(super) fn read_v2_body(
         .with_field(V2_TYPES_LABEL));
     }
     let mut layout = V2Layout::new(&types);
+    out.header.version = version;
+    out.header.types = System::ALL
+        .iter()
+        .map(|&s| (s, layout.codes(s).into_iter().flatten().collect::<Vec<_>>()))
+        .filter(|(_, c)| !c.is_empty())
+        .collect();
 
-    *records = true;
+    out.records = true;
     while let Some((ln, l)) = rd.next_line()? {
         let line = l.to_vec();
         if text(&line).is_empty() {
@@ -345,10 +407,10 @@ pub(super) fn read_v2_body(
         })?;
         let sat_list = v2_sat_list(rd, path, ln, &line, n)?;
         let clk = f64_field(path, ln, "receiver clock offset", cols(&line, 68, 80))?;
-        let mut sats = Vec::new();
+        let mut sats = Vec::with_capacity(sat_list.len());
         for sat in &sat_list {
-            let mut vals: [Option<f64>; 4] = [None; 4];
-            let mut lli = 0;
+            let codes = sat.sat.map(|s| layout.codes(s.system)).unwrap_or_default();
+            let mut signals = Vec::with_capacity(codes.len());
             for j in 0..layout.lines_per_sat {
                 let (oln, ol) = rd.next_line()?.ok_or_else(|| {
                     InputError::at_line(
@@ -361,44 +423,27 @@ pub(super) fn read_v2_body(
                         ),
                     )
                 })?;
-                if sat.gps_prn.is_none() {
-                    continue;
-                }
-                for (w, name) in V2_NAMES.iter().enumerate() {
-                    let Some(i) = layout.idx.get(w).copied().flatten() else {
+                for i in 5 * j..(5 * j + 5).min(codes.len()) {
+                    let Some(code) = codes.get(i).copied().flatten() else {
                         continue;
                     };
-                    if i / 5 != j {
+                    let c = 16 * (i % 5);
+                    let ob = cols(ol, c, c + 16);
+                    if ob.iter().all(|&x| x == b' ') {
                         continue;
                     }
-                    let c = 16 * (i % 5);
-                    let field = format!("{} {name}", sat.id);
-                    if let Some(v) = vals.get_mut(w) {
-                        *v = f64_field(path, oln, &field, cols(ol, c, c + 14))?;
-                    }
-                    if w == 1 {
-                        lli = lli_digit(
-                            path,
-                            oln,
-                            &format!("{field} LLI"),
-                            cols(ol, c + 14, c + 15),
-                        )?;
-                    }
+                    let field = format!("{} {}", sat.id, layout.names[i]);
+                    let value = f64_field(path, oln, &field, cols(ob, 0, 14))?;
+                    let lli = flag_digit(path, oln, &field, "LLI", cols(ob, 14, 15))?;
+                    let ssi = flag_digit(path, oln, &field, "SSI", cols(ob, 15, 16))?;
+                    signals.push((code, ObsValue { value, lli, ssi }));
                 }
             }
-            if let Some(prn) = sat.gps_prn {
-                let [pseudorange_m, carrier_cycles, doppler_hz, cn0_dbhz] = vals;
-                sats.push(SatObs {
-                    prn,
-                    pseudorange_m,
-                    carrier_cycles,
-                    doppler_hz,
-                    cn0_dbhz,
-                    lli,
-                });
+            if let Some(sat) = sat.sat {
+                sats.push(SatSignals { sat, signals });
             }
         }
-        out.push(ObsEpoch {
+        out.epochs.push(MultiObsEpoch {
             t,
             flag,
             rx_clock_offset_s: clk,
