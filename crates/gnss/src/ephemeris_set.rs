@@ -27,30 +27,11 @@ impl EphemerisSet {
     /// as in post-processing (RTKLIB uses 2 h for GPS); a real-time user who must not
     /// use an ephemeris before its transmission should check `transmission_time`.
     pub fn select(&self, prn: u8, t: GpsTime) -> Option<&GpsEphemeris> {
-        let mut best: Option<(&GpsEphemeris, f64)> = None;
-        for e in self.ephs.iter().filter(|e| e.prn == prn && e.health == 0) {
-            let dt = t.diff_s(&e.toe);
-            if dt.abs() > 0.5 * e.fit_interval_s() {
-                continue;
-            }
-            let better = match best {
-                None => true,
-                Some((b, bdt)) => {
-                    if dt.abs() != bdt.abs() {
-                        dt.abs() < bdt.abs()
-                    } else if e.toe != b.toe {
-                        e.toe.diff_s(&b.toe) > 0.0
-                    } else {
-                        let tt = |x: &GpsEphemeris| x.transmission_time.map(|g| (g.week, g.sow));
-                        tt(e).partial_cmp(&tt(b)) == Some(std::cmp::Ordering::Greater)
-                    }
-                }
-            };
-            if better {
-                best = Some((e, dt));
-            }
-        }
-        best.map(|(e, _)| e)
+        nearest_record(
+            self.ephs.iter().filter(|e| e.prn == prn && e.health == 0),
+            t,
+            |e| (e.toe, e.transmission_time, 0.5 * e.fit_interval_s()),
+        )
     }
 
     /// The PRNs present, sorted, without duplicates.
@@ -60,6 +41,41 @@ impl EphemerisSet {
         p.dedup();
         p
     }
+}
+
+/// The record nearest `t` by its reference time, within its age limit; on a tie the
+/// later toe, then the later transmission. `key`: (toe in GPST, transmission time,
+/// age limit \[s\]). The one rule of `EphemerisSet` and `EphemerisStore`.
+pub(crate) fn nearest_record<'a, E>(
+    records: impl Iterator<Item = &'a E>,
+    t: GpsTime,
+    key: impl Fn(&E) -> (GpsTime, Option<GpsTime>, f64),
+) -> Option<&'a E> {
+    let mut best: Option<(&E, f64, GpsTime, Option<GpsTime>)> = None;
+    for e in records {
+        let (toe, tt, max_age_s) = key(e);
+        let dt = t.diff_s(&toe);
+        if dt.abs() > max_age_s {
+            continue;
+        }
+        let better = match &best {
+            None => true,
+            Some((_, bdt, btoe, btt)) => {
+                if dt.abs() != bdt.abs() {
+                    dt.abs() < bdt.abs()
+                } else if toe != *btoe {
+                    toe.diff_s(btoe) > 0.0
+                } else {
+                    let w = |x: &Option<GpsTime>| x.map(|g| (g.week, g.sow));
+                    w(&tt).partial_cmp(&w(btt)) == Some(std::cmp::Ordering::Greater)
+                }
+            }
+        };
+        if better {
+            best = Some((e, dt, toe, tt));
+        }
+    }
+    best.map(|b| b.0)
 }
 
 #[cfg(test)]

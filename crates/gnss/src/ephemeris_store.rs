@@ -90,30 +90,9 @@ impl EphemerisStore {
 }
 
 fn best<'a>(it: impl Iterator<Item = &'a Ephemeris>, t: GpsTime) -> Option<&'a Ephemeris> {
-    let mut best: Option<(&Ephemeris, f64)> = None;
-    for e in it.filter(|e| e.healthy()) {
-        let dt = t.diff_s(&e.toe_gpst());
-        if dt.abs() > e.max_age_s() {
-            continue;
-        }
-        let better = match best {
-            None => true,
-            Some((b, bdt)) => {
-                if dt.abs() != bdt.abs() {
-                    dt.abs() < bdt.abs()
-                } else if e.toe_gpst() != b.toe_gpst() {
-                    e.toe_gpst().diff_s(&b.toe_gpst()) > 0.0
-                } else {
-                    let tt = |x: &Ephemeris| x.transmission_time_gpst().map(|g| (g.week, g.sow));
-                    tt(e).partial_cmp(&tt(b)) == Some(std::cmp::Ordering::Greater)
-                }
-            }
-        };
-        if better {
-            best = Some((e, dt));
-        }
-    }
-    best.map(|(e, _)| e)
+    crate::ephemeris_set::nearest_record(it.filter(|e| e.healthy()), t, |e| {
+        (e.toe_gpst(), e.transmission_time_gpst(), e.max_age_s())
+    })
 }
 
 #[cfg(test)]

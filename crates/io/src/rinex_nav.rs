@@ -780,14 +780,7 @@ fn read_gps_record(
     let iodc = whole_in(path, line_of(23), "IODC", f[23], 0.0, 1023.0)? as u16;
     let transmission_time = if present[24] && f[24] < TT_UNKNOWN * 0.999 {
         // Seconds of the toe week; moved to within half a week of toe.
-        let mut tt = GpsTime::new(week, f[24]);
-        let d = tt.diff_s(&toe);
-        if d > HALF_WEEK_S {
-            tt = tt.add_s(-SECONDS_PER_WEEK);
-        } else if d < -HALF_WEEK_S {
-            tt = tt.add_s(SECONDS_PER_WEEK);
-        }
-        Some(tt)
+        Some(within_half_week(GpsTime::new(week, f[24]), toe))
     } else {
         None
     };
@@ -985,6 +978,19 @@ pub fn write_rinex3_nav_dated(
         }
     }
     Ok(())
+}
+
+/// `t` moved by whole weeks to within half a week of `near` (a transmission time
+/// given as seconds of the toe's week).
+pub(crate) fn within_half_week(t: GpsTime, near: GpsTime) -> GpsTime {
+    let d = t.diff_s(&near);
+    if d > HALF_WEEK_S {
+        t.add_s(-SECONDS_PER_WEEK)
+    } else if d < -HALF_WEEK_S {
+        t.add_s(SECONDS_PER_WEEK)
+    } else {
+        t
+    }
 }
 
 #[cfg(test)]

@@ -12,7 +12,7 @@ use crate::rinex_nav::{
 use nalgebra::Vector3;
 use navfuse_gnss::ephemeris::beidou::BDT_WEEK0_IN_GPS_WEEKS;
 use navfuse_gnss::ephemeris::kepler::KeplerOrbit;
-use navfuse_gnss::time::{GpstCalendar, HALF_WEEK_S, SECONDS_PER_WEEK};
+use navfuse_gnss::time::{GpstCalendar, SECONDS_PER_WEEK};
 use navfuse_gnss::{BeiDouEphemeris, GalileoEphemeris, GlonassEphemeris, GpsTime};
 use std::path::Path;
 
@@ -180,16 +180,10 @@ impl Orbit {
         )? as i32;
         let toe = GpsTime::new(week, toe_s);
         let tt = match self.v.get(24).copied().flatten() {
-            Some(s) if s < TT_UNKNOWN * 0.999 => {
-                let mut tt = GpsTime::new(week, s);
-                let d = tt.diff_s(&toe);
-                if d > HALF_WEEK_S {
-                    tt = tt.add_s(-SECONDS_PER_WEEK);
-                } else if d < -HALF_WEEK_S {
-                    tt = tt.add_s(SECONDS_PER_WEEK);
-                }
-                Some(tt)
-            }
+            Some(s) if s < TT_UNKNOWN * 0.999 => Some(crate::rinex_nav::within_half_week(
+                GpsTime::new(week, s),
+                toe,
+            )),
             _ => None,
         };
         Ok((toe, tt))

@@ -3,7 +3,7 @@
 //! Table A14 for the fields). BDT = GPST - 14 s, BDT week 0 = GPS week 1356
 //! (ICD §4.2): toc and toe are kept in BDT, t is converted from GPST.
 
-use super::kepler::{KeplerOrbit, BEIDOU_CONSTANTS};
+use super::kepler::{broadcast_state, KeplerOrbit, BEIDOU_CONSTANTS};
 use super::SatState;
 use crate::time::{wrap_half_week, GpsTime};
 
@@ -66,20 +66,15 @@ impl BeiDouEphemeris {
     /// included, TGD not (a B1I user subtracts TGD1, ICD §5.2.4.11).
     pub fn sat_state(&self, t_gpst: GpsTime) -> SatState {
         let t = gpst_to_bdt(t_gpst);
-        let k = &BEIDOU_CONSTANTS;
-        let tk = wrap_half_week(t.diff_s(&self.toe));
-        let s = self.orbit.state(k, tk, self.is_geo());
-        let (rel, rel_dot) = self.orbit.relativistic(k, &s);
-        let dt = wrap_half_week(t.diff_s(&self.toc));
-        let poly = self.af0_s + (self.af1_s_per_s + self.af2_s_per_s2 * dt) * dt;
-        let poly_dot = self.af1_s_per_s + 2.0 * self.af2_s_per_s2 * dt;
-        SatState {
-            pos_ecef_m: s.pos_ecef_m,
-            vel_ecef_mps: s.vel_ecef_mps,
-            clock_bias_s: poly + rel,
-            clock_drift_s_per_s: poly_dot + rel_dot,
-            relativistic_s: rel,
-        }
+        let af = [self.af0_s, self.af1_s_per_s, self.af2_s_per_s2];
+        broadcast_state(
+            &self.orbit,
+            &BEIDOU_CONSTANTS,
+            wrap_half_week(t.diff_s(&self.toe)),
+            self.is_geo(),
+            af,
+            wrap_half_week(t.diff_s(&self.toc)),
+        )
     }
 }
 

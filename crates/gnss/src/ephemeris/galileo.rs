@@ -4,7 +4,7 @@
 //! GST is aligned to GPST (same week numbering in RINEX, the GGTO of a few ns is
 //! ignored here): toc, toe and t are GPS times.
 
-use super::kepler::{KeplerOrbit, GALILEO_CONSTANTS};
+use super::kepler::{broadcast_state, KeplerOrbit, GALILEO_CONSTANTS};
 use super::SatState;
 use crate::time::{wrap_half_week, GpsTime};
 
@@ -84,20 +84,15 @@ impl GalileoEphemeris {
     /// Position, velocity and clock at GPST (= GST) t, ECEF at t; the clock includes
     /// the relativistic term, not the BGD.
     pub fn sat_state(&self, t: GpsTime) -> SatState {
-        let k = &GALILEO_CONSTANTS;
-        let tk = wrap_half_week(t.diff_s(&self.toe));
-        let s = self.orbit.state(k, tk, false);
-        let (rel, rel_dot) = self.orbit.relativistic(k, &s);
-        let dt = wrap_half_week(t.diff_s(&self.toc));
-        let poly = self.af0_s + (self.af1_s_per_s + self.af2_s_per_s2 * dt) * dt;
-        let poly_dot = self.af1_s_per_s + 2.0 * self.af2_s_per_s2 * dt;
-        SatState {
-            pos_ecef_m: s.pos_ecef_m,
-            vel_ecef_mps: s.vel_ecef_mps,
-            clock_bias_s: poly + rel,
-            clock_drift_s_per_s: poly_dot + rel_dot,
-            relativistic_s: rel,
-        }
+        let af = [self.af0_s, self.af1_s_per_s, self.af2_s_per_s2];
+        broadcast_state(
+            &self.orbit,
+            &GALILEO_CONSTANTS,
+            wrap_half_week(t.diff_s(&self.toe)),
+            false,
+            af,
+            wrap_half_week(t.diff_s(&self.toc)),
+        )
     }
 }
 

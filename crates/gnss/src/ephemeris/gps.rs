@@ -5,7 +5,7 @@
 //! Table A4 gives "radians"; the navigation message itself uses semicircles, which a
 //! decoder multiplies by pi before filling this struct).
 
-use super::kepler::{KeplerConstants, KeplerOrbit, GPS_CONSTANTS};
+use super::kepler::{broadcast_state, KeplerConstants, KeplerOrbit, GPS_CONSTANTS};
 use crate::time::{wrap_half_week, GpsTime};
 use nalgebra::Vector3;
 
@@ -210,19 +210,17 @@ impl GpsEphemeris {
     /// [`Self::sat_state`] with another system's constants (QZSS LNAV: IS-QZSS-PNT
     /// §4.1.2, the same algorithm; t and the message's times in the same time scale).
     pub fn sat_state_with(&self, k: &KeplerConstants, t: GpsTime) -> SatState {
-        let orbit = self.orbit();
-        let tk = wrap_half_week(t.diff_s(&self.toe));
-        let s = orbit.state(k, tk, false);
         // Clock (20.3.3.3.3.1): polynomial + relativistic F e sqrt(A) sin Ek.
-        let (rel, rel_dot) = orbit.relativistic(k, &s);
-        let (poly, poly_dot) = self.clock_poly(t);
-        SatState {
-            pos_ecef_m: s.pos_ecef_m,
-            vel_ecef_mps: s.vel_ecef_mps,
-            clock_bias_s: poly + rel,
-            clock_drift_s_per_s: poly_dot + rel_dot,
-            relativistic_s: rel,
-        }
+        let af = [self.af0_s, self.af1_s_per_s, self.af2_s_per_s2];
+        let dt = wrap_half_week(t.diff_s(&self.toc));
+        broadcast_state(
+            &self.orbit(),
+            k,
+            wrap_half_week(t.diff_s(&self.toe)),
+            false,
+            af,
+            dt,
+        )
     }
 }
 

@@ -190,6 +190,31 @@ fn geo_rotate(p: Vector3<f64>, v: Vector3<f64>, phi: f64, we: f64) -> (Vector3<f
     (rz * q, rz * (rx * v) + rz_dot * q)
 }
 
+/// The broadcast satellite state at `tk` from toe and `dt_clock_s` from toc: the
+/// orbit, and the clock polynomial af0 + af1 dt + af2 dt^2 (IS-GPS-200 20.3.3.3.3.1,
+/// the same form in the Galileo, BeiDou and QZSS ICDs) plus the relativistic term.
+pub fn broadcast_state(
+    orbit: &KeplerOrbit,
+    k: &KeplerConstants,
+    tk: f64,
+    bds_geo: bool,
+    af_s: [f64; 3],
+    dt_clock_s: f64,
+) -> crate::ephemeris::SatState {
+    let s = orbit.state(k, tk, bds_geo);
+    let (rel, rel_dot) = orbit.relativistic(k, &s);
+    let dt = dt_clock_s;
+    let poly = af_s[0] + (af_s[1] + af_s[2] * dt) * dt;
+    let poly_dot = af_s[1] + 2.0 * af_s[2] * dt;
+    crate::ephemeris::SatState {
+        pos_ecef_m: s.pos_ecef_m,
+        vel_ecef_mps: s.vel_ecef_mps,
+        clock_bias_s: poly + rel,
+        clock_drift_s_per_s: poly_dot + rel_dot,
+        relativistic_s: rel,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
