@@ -30,10 +30,11 @@ loosely coupled GNSS position/velocity; tightly coupled pseudoranges with Dopple
 carrier phase (RINEX 3, broadcast ephemeris, DGPS corrections); heading from course over ground or \
 a dual antenna; odometer, non-holonomic constraint, zero velocity; barometric altitude; a GNSS integrity monitor against \
 spoofing with dead-reckoning fallback.\n\n\
-Inputs: KF-GINS text files, CSV IMU logs, the rtklibexplorer raw IMU log, RTKLIB .pos solutions, RINEX 3 \
-observation and navigation files, odometer, heading and barometer logs, DGPS corrections. \
-Outputs: KF-GINS .nav / IMU_ERR / STD files, CSV, events and integrity logs. Formats: docs/FORMATS.md; \
-configuration keys: docs/CONFIG.md."
+Inputs: KF-GINS text files, CSV IMU logs, the rtklibexplorer raw IMU log, RTKLIB .pos solutions, RINEX \
+observation and navigation files (tight coupling and `spp`: GPS), odometer, heading and barometer logs, DGPS corrections. \
+Outputs: KF-GINS .nav / IMU_ERR / STD files, CSV with the solution state, innovations, extra states, the \
+configuration used, events and integrity logs; exports (.pos, NMEA, KML, GeoJSON, GPX); `report` draws an \
+offline HTML page. Formats: docs/FORMATS.md; configuration keys: docs/CONFIG.md."
 )]
 struct Cli {
     #[command(subcommand)]
