@@ -1,17 +1,24 @@
 //! `navfuse spp`: the GNSS-only single point solution of a RINEX observation file
-//! with broadcast ephemerides (navfuse_gnss::spp), epoch by epoch, written as an
-//! RTKLIB `.pos` file so that it can be compared with RTKLIB's `rnx2rtkp` directly.
-//! GPS L1 C/A for now; the other constellations come with issue 19's
-//! multi-system SPP (asking for them is an error that says so).
+//! (navfuse_gnss::spp), epoch by epoch, with the broadcast ephemerides of every
+//! system or precise SP3 orbits and RINEX clocks, written as an RTKLIB `.pos` file
+//! so that it can be compared with RTKLIB's `rnx2rtkp` directly.
 
 use crate::error::Error;
 use navfuse_core::earth::c_ne;
 use navfuse_core::sat::System;
+use navfuse_gnss::obs::ObsSignalsHeader;
+use navfuse_gnss::precise::PreciseProducts;
+use navfuse_gnss::signal_plan::SignalPlan;
 use navfuse_gnss::spp::{IonoModel, SppConfig, SppError, SppMeasurement, SppSolution, SppSolver};
-use navfuse_gnss::{EphemerisSet, GpsTime};
+use navfuse_gnss::{
+    Ephemeris, EphemerisSet, EphemerisStore, GpsTime, MultiObsEpoch, ObsCode, OrbitSource,
+    PreciseSource,
+};
 use navfuse_io::export::{PosFile, PosLine};
+use navfuse_io::rinex_clk::{read_rinex_clk, set_clocks};
 use navfuse_io::rinex_nav::read_rinex_nav;
-use navfuse_io::rinex_obs::{read_rinex_obs, ObsEpoch};
+use navfuse_io::rinex_obs::{read_rinex_obs_all, ObsEpoch};
+use navfuse_io::sp3::{add_to_products, read_sp3};
 use std::path::{Path, PathBuf};
 
 /// What to solve and how (the settings RTKLIB's single mode has).
@@ -20,6 +27,14 @@ pub struct SppJob {
     pub obs: PathBuf,
     pub navs: Vec<PathBuf>,
     pub systems: Vec<System>,
+    /// Code preferences per system (empty: the documented defaults).
+    pub signals: Vec<(System, Vec<ObsCode>)>,
+    /// Ionosphere-free code where a satellite has two bands.
+    pub dual_frequency: bool,
+    /// SP3 orbit files (consecutive days in any order); empty: broadcast orbits.
+    pub sp3: Vec<PathBuf>,
+    /// RINEX clock files; without them the SP3 clocks are used.
+    pub clk: Vec<PathBuf>,
     pub elevation_mask_deg: f64,
     /// Broadcast Klobuchar ionosphere when the navigation header has its
     /// coefficients (RTKLIB `ionoopt=brdc`); false: none.
@@ -28,9 +43,9 @@ pub struct SppJob {
     pub troposphere: bool,
     /// Chi-square fault detection and exclusion.
     pub fde: bool,
-    /// Power p of the elevation weighting b^2 / sin^p el: 2 (navfuse's default), 1
-    /// (what RTKLIB 2.4.3's pntpos computes, to compare with it).
-    pub elevation_sin_power: f64,
+    /// Weight as RTKLIB 2.4.3's pntpos does, to compare with rnx2rtkp: elevation
+    /// term b^2 / sin el (navfuse: b^2 / sin^2 el) and its Galileo SISA indexing.
+    pub rtklib_weights: bool,
 }
 
 /// The solutions, one per observation epoch, and what the run found.
@@ -38,6 +53,8 @@ pub struct SppJob {
 pub struct SppRun {
     pub epochs: Vec<(GpsTime, Result<SppSolution, SppError>)>,
     pub notes: Vec<String>,
+    /// What was used, for the .pos header: systems, signals, orbits.
+    pub description: String,
 }
 
 impl SppRun {
@@ -46,45 +63,90 @@ impl SppRun {
     }
 }
 
+fn list(paths: &[PathBuf]) -> String {
+    paths
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Precise products from SP3 files (and clock files, which replace the SP3 clocks).
+pub fn read_precise(sp3: &[PathBuf], clk: &[PathBuf]) -> Result<PreciseProducts, Error> {
+    let mut files = Vec::new();
+    for p in sp3 {
+        files.push(read_sp3(p)?);
+    }
+    let first = files
+        .iter()
+        .filter_map(|f| f.samples.first().map(|s| s.0))
+        .min_by(|a, b| a.diff_s(b).total_cmp(&0.0))
+        .ok_or_else(|| Error::Other(format!("{}: no SP3 samples", list(sp3))))?;
+    let interval = files.iter().map(|f| f.interval_s).fold(0.0, f64::max);
+    let mut clocks = Vec::new();
+    for p in clk {
+        clocks.push(read_rinex_clk(p)?);
+    }
+    let clock_interval = clocks
+        .iter()
+        .filter_map(clock_spacing_s)
+        .fold(interval, f64::min);
+    let mut products = PreciseProducts::new(first, interval, clock_interval);
+    for f in &files {
+        add_to_products(f, &mut products);
+    }
+    if !clocks.is_empty() {
+        products.clear_clocks();
+        for c in &clocks {
+            set_clocks(c, &mut products);
+        }
+    }
+    products.finish();
+    Ok(products)
+}
+
+/// The smallest spacing of a satellite's consecutive clock samples \[s\].
+fn clock_spacing_s(c: &navfuse_io::rinex_clk::ClockFile) -> Option<f64> {
+    let sat = c.samples.first()?.1;
+    let t: Vec<GpsTime> = c
+        .samples
+        .iter()
+        .filter(|s| s.1 == sat)
+        .map(|s| s.0)
+        .collect();
+    t.windows(2)
+        .map(|w| w[1].diff_s(&w[0]))
+        .filter(|d| *d > 0.0)
+        .min_by(f64::total_cmp)
+}
+
 /// Read the files and solve every epoch.
 pub fn run_spp(job: &SppJob) -> Result<SppRun, Error> {
-    let others: Vec<String> = job
-        .systems
-        .iter()
-        .filter(|s| **s != System::Gps)
-        .map(|s| format!("{} ({})", s.letter(), s.name()))
-        .collect();
-    if !others.is_empty() {
-        return Err(Error::Other(format!(
-            "--systems {}: not supported yet (the multi-constellation SPP is issue 19's next step); use --systems G",
-            others.join(", ")
-        )));
-    }
     let mut notes = Vec::new();
-    let mut ephs = Vec::new();
+    let mut store = EphemerisStore::default();
     let (mut alpha, mut beta) = (None, None);
     for p in &job.navs {
         let nav = read_rinex_nav(p)?;
-        if nav.skipped_records > 0 {
-            notes.push(format!(
-                "{}: {} records of other systems skipped",
-                p.display(),
-                nav.skipped_records
-            ));
-        }
         notes.extend(nav.warnings.iter().map(|w| format!("{}: {w}", p.display())));
         alpha = alpha.or(nav.iono_alpha);
         beta = beta.or(nav.iono_beta);
-        ephs.extend(nav.gps);
+        nav.store().iter().for_each(|e| store.push(e.clone()));
     }
-    if ephs.is_empty() {
+    let counts = store.counts();
+    for sys in &job.systems {
+        if !counts.contains_key(sys) {
+            notes.push(format!(
+                "{}: no {} ephemerides: its satellites are not used",
+                list(&job.navs),
+                sys.name()
+            ));
+        }
+    }
+    if !job.systems.iter().any(|s| counts.contains_key(s)) {
         return Err(Error::Other(format!(
-            "{}: no GPS ephemerides",
-            job.navs
-                .iter()
-                .map(|p| p.display().to_string())
-                .collect::<Vec<_>>()
-                .join(", ")
+            "{}: no ephemerides of the systems asked for ({})",
+            list(&job.navs),
+            letters(&job.systems)
         )));
     }
     let iono = if job.broadcast_iono {
@@ -99,14 +161,23 @@ pub fn run_spp(job: &SppJob) -> Result<SppRun, Error> {
     } else {
         IonoModel::None
     };
-    let set = EphemerisSet::new(ephs);
-    let obs = read_rinex_obs(&job.obs)?;
-    if obs.is_empty() {
+    let obs = read_rinex_obs_all(&job.obs)?;
+    notes.extend(
+        obs.warnings
+            .iter()
+            .map(|w| format!("{}: {w}", job.obs.display())),
+    );
+    if obs.epochs.is_empty() {
         return Err(Error::Other(format!(
-            "{}: no GPS observation epochs",
+            "{}: no observation epochs",
             job.obs.display()
         )));
     }
+    let plan = SignalPlan {
+        systems: job.systems.clone(),
+        codes: job.signals.clone(),
+        dual_frequency: job.dual_frequency,
+    };
     let mut cfg = SppConfig {
         elevation_mask_rad: job.elevation_mask_deg.to_radians(),
         iono,
@@ -114,9 +185,131 @@ pub fn run_spp(job: &SppJob) -> Result<SppRun, Error> {
         fde: job.fde,
         ..SppConfig::default()
     };
-    cfg.errors.elevation_sin_power = job.elevation_sin_power;
-    let epochs = solve_epochs(&obs, &set, cfg);
-    Ok(SppRun { epochs, notes })
+    if job.rtklib_weights {
+        cfg.errors.elevation_sin_power = 1.0;
+        cfg.errors.rtklib_sisa = true;
+    }
+    let precise = if job.sp3.is_empty() {
+        if !job.clk.is_empty() {
+            return Err(Error::Other(
+                "--clk needs --sp3 (the clock files go with precise orbits)".into(),
+            ));
+        }
+        None
+    } else {
+        Some(read_precise(&job.sp3, &job.clk)?)
+    };
+    let orbits: Box<dyn OrbitSource + '_> = match &precise {
+        Some(products) => Box::new(PreciseSource {
+            products,
+            broadcast: &store,
+        }),
+        None => Box::new(store.clone()),
+    };
+    let epochs = solve_multi(
+        &obs.epochs,
+        &obs.header,
+        &store,
+        orbits.as_ref(),
+        &plan,
+        cfg,
+    );
+    let description = format!(
+        "Single ({}; {}; {} orbits)",
+        letters(&job.systems),
+        if job.dual_frequency {
+            "ionosphere-free code where two bands"
+        } else {
+            "single-frequency code"
+        },
+        if precise.is_some() {
+            "SP3"
+        } else {
+            "broadcast"
+        }
+    );
+    Ok(SppRun {
+        epochs,
+        notes,
+        description,
+    })
+}
+
+fn letters(systems: &[System]) -> String {
+    systems
+        .iter()
+        .map(|s| s.letter().to_string())
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+/// Solve every epoch of every system's observations: the plan's signal per
+/// satellite, the GLONASS channel from the observation header or the broadcast
+/// record.
+pub fn solve_multi(
+    obs: &[MultiObsEpoch],
+    header: &ObsSignalsHeader,
+    broadcast: &EphemerisStore,
+    orbits: &dyn OrbitSource,
+    plan: &SignalPlan,
+    cfg: SppConfig,
+) -> Vec<(GpsTime, Result<SppSolution, SppError>)> {
+    let channels = glonass_channels(header, broadcast);
+    solve_each(obs, orbits, cfg, |e| {
+        e.sats
+            .iter()
+            .filter_map(|s| {
+                let k = (s.sat.system == System::Glonass)
+                    .then(|| channels.get(usize::from(s.sat.prn)).copied().flatten())
+                    .flatten();
+                plan.choose(s, k).map(|c| SppMeasurement::from(&c))
+            })
+            .collect()
+    })
+}
+
+/// Solve the epochs in order, each from the previous solution, with the
+/// measurements `meas` makes of it.
+fn solve_each<E: HasTime>(
+    obs: &[E],
+    orbits: &(impl OrbitSource + ?Sized),
+    cfg: SppConfig,
+    meas: impl Fn(&E) -> Vec<SppMeasurement>,
+) -> Vec<(GpsTime, Result<SppSolution, SppError>)> {
+    let mut solver = SppSolver::new(cfg);
+    obs.iter()
+        .map(|e| (e.t(), solver.solve(orbits, e.t(), &meas(e))))
+        .collect()
+}
+
+/// An observation epoch's receiver time tag.
+trait HasTime {
+    fn t(&self) -> GpsTime;
+}
+
+impl<S> HasTime for navfuse_gnss::obs::Epoch<S> {
+    fn t(&self) -> GpsTime {
+        self.t
+    }
+}
+
+/// GLONASS frequency channel by slot (index = slot): the observation header's
+/// `GLONASS SLOT / FRQ #`, else the broadcast records'.
+pub fn glonass_channels(header: &ObsSignalsHeader, broadcast: &EphemerisStore) -> Vec<Option<i8>> {
+    let mut k = vec![None; 64];
+    for e in broadcast.iter() {
+        if let Ephemeris::Glonass(g) = e {
+            if let Some(slot) = k.get_mut(usize::from(g.slot)) {
+                *slot = Some(g.freq_channel);
+            }
+        }
+    }
+    for &(slot, ch) in &header.glonass_channels {
+        if let Some(s) = k.get_mut(usize::from(slot)) {
+            *s = Some(ch);
+        }
+    }
+    k
 }
 
 /// Solve every epoch's GPS L1 C/A pseudoranges (and Dopplers) with `cfg`.
@@ -125,24 +318,15 @@ pub fn solve_epochs(
     ephs: &EphemerisSet,
     cfg: SppConfig,
 ) -> Vec<(GpsTime, Result<SppSolution, SppError>)> {
-    let mut solver = SppSolver::new(cfg);
-    obs.iter()
-        .map(|e| {
-            let meas: Vec<SppMeasurement> = e
-                .sats
-                .iter()
-                .filter_map(|s| {
-                    s.pseudorange_m.map(|pr| SppMeasurement {
-                        prn: s.prn,
-                        pseudorange_m: pr,
-                        doppler_hz: s.doppler_hz,
-                        dgps_prc_m: None,
-                    })
-                })
-                .collect();
-            (e.t, solver.solve(ephs, e.t, &meas))
-        })
-        .collect()
+    solve_each(obs, ephs, cfg, |e| {
+        e.sats
+            .iter()
+            .filter_map(|s| {
+                s.pseudorange_m
+                    .map(|pr| SppMeasurement::gps_l1(s.prn, pr, s.doppler_hz))
+            })
+            .collect()
+    })
 }
 
 /// Write the solved epochs as an RTKLIB `.pos` file (Q = 5 single, ns, the
@@ -152,7 +336,7 @@ pub fn write_spp_pos(path: &Path, run: &SppRun, elevation_mask_deg: f64) -> Resu
     let mut f = PosFile::create(
         path,
         "single point positioning, navfuse spp",
-        "Single (GPS L1 C/A, broadcast ephemerides)",
+        &run.description,
         elevation_mask_deg,
     )?;
     for (_, r) in &run.epochs {

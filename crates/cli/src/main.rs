@@ -31,7 +31,7 @@ carrier phase (RINEX 3, broadcast ephemeris, DGPS corrections); heading from cou
 a dual antenna; odometer, non-holonomic constraint, zero velocity; barometric altitude; a GNSS integrity monitor against \
 spoofing with dead-reckoning fallback.\n\n\
 Inputs: KF-GINS text files, CSV IMU logs, the rtklibexplorer raw IMU log, RTKLIB .pos solutions, RINEX \
-observation and navigation files (tight coupling and `spp`: GPS), odometer, heading and barometer logs, DGPS corrections. \
+observation and navigation files (tight coupling: GPS; `spp`: GPS, GLONASS, Galileo, BeiDou, QZSS; SP3 and clock files), odometer, heading and barometer logs, DGPS corrections. \
 Outputs: KF-GINS .nav / IMU_ERR / STD files, CSV with the solution state, innovations, extra states, the \
 configuration used, events and integrity logs; exports (.pos, NMEA, KML, GeoJSON, GPX); `report` draws an \
 offline HTML page. Formats: docs/FORMATS.md; configuration keys: docs/CONFIG.md."
@@ -126,9 +126,10 @@ enum Command {
     /// up to 50 000 reference epochs against the full-rate solution.
     Report(report_cmd::ReportArgs),
     /// GNSS-only single point positioning of a RINEX observation file with broadcast
-    /// ephemerides: position, receiver clock, satellites used and DOP per epoch
-    /// (GPS L1 C/A today; the other constellations are issue 19's next step), as
-    /// an RTKLIB .pos file with --out, to compare with RTKLIB's rnx2rtkp directly.
+    /// ephemerides (or SP3 orbits and clocks): GPS, GLONASS, Galileo, BeiDou, QZSS with
+    /// an inter-system bias per system, single or dual frequency; position, receiver
+    /// clock, satellites used and DOP per epoch, as an RTKLIB .pos file with --out, to
+    /// compare with RTKLIB's rnx2rtkp directly.
     Spp(spp_cmd::SppArgs),
     /// Score a solution against a reference trajectory.
     ///

@@ -1,22 +1,38 @@
 //! `navfuse spp OBS NAV...`: GNSS-only single point positioning (navfuse_app::spp).
 
-use anyhow::{bail, Result};
+use anyhow::{anyhow, bail, Result};
 use navfuse_app::spp::{run_spp, write_spp_pos, SppJob};
-use navfuse_core::sat::System;
+use navfuse_gnss::signal_plan::{parse_codes, parse_systems};
 use std::path::PathBuf;
 
 /// `navfuse spp` (its --help).
 #[derive(clap::Args)]
 pub struct SppArgs {
-    /// RINEX 2/3 observation file.
+    /// RINEX 2/3/4 observation file (plain, .gz or Compact RINEX).
     pub obs: PathBuf,
-    /// RINEX navigation file(s) with the broadcast ephemerides.
+    /// RINEX navigation file(s) with the broadcast ephemerides (mixed or per system).
     #[arg(required = true)]
     pub nav: Vec<PathBuf>,
-    /// Constellations, comma-separated RINEX letters (G GPS, R GLONASS, E Galileo, C
-    /// BeiDou, J QZSS). Only G works today; the others are refused with a message.
+    /// Constellations, comma-separated RINEX letters: G GPS, R GLONASS, E Galileo, C
+    /// BeiDou, J QZSS, I NavIC. GPS and QZSS share the receiver clock; each other
+    /// system gets an inter-system bias.
     #[arg(long, default_value = "G", value_name = "LIST")]
     pub systems: String,
+    /// Code preferences per system, e.g. `R:C1P+C1C,E:C1X` (default: L1/E1/G1 and
+    /// BeiDou B1I with the priorities of docs/GNSS.md "Signal selection").
+    #[arg(long, value_name = "SYS:CODE[+CODE],...")]
+    pub signals: Option<String>,
+    /// Use the dual-frequency ionosphere-free code where a satellite has two bands
+    /// (the others keep their single code and the ionosphere model).
+    #[arg(long)]
+    pub dual_frequency: bool,
+    /// SP3 precise orbit file(s) instead of the broadcast orbits (the broadcast
+    /// records still give health and group delays).
+    #[arg(long, value_name = "FILE")]
+    pub sp3: Vec<PathBuf>,
+    /// RINEX clock file(s) with the SP3 orbits (else the SP3 clocks).
+    #[arg(long, value_name = "FILE")]
+    pub clk: Vec<PathBuf>,
     /// Elevation mask [deg].
     #[arg(long, default_value_t = 10.0, value_name = "DEG")]
     pub elevation_mask: f64,
@@ -29,8 +45,9 @@ pub struct SppArgs {
     /// No fault detection and exclusion (the chi-square test of the residuals).
     #[arg(long)]
     pub no_fde: bool,
-    /// Weight the pseudoranges as RTKLIB 2.4.3's pntpos does (b^2 / sin el) instead
-    /// of navfuse's b^2 / sin^2 el, to compare with rnx2rtkp epoch by epoch.
+    /// Weight the pseudoranges as RTKLIB 2.4.3's pntpos does (b^2 / sin el instead
+    /// of navfuse's b^2 / sin^2 el; Galileo SISA as its RINEX reader indexes it), to
+    /// compare with rnx2rtkp epoch by epoch.
     #[arg(long)]
     pub rtklib_weights: bool,
     /// The solution as an RTKLIB .pos file (GPST, llh, Q = 5, ns, sdn..sdun).
@@ -39,33 +56,24 @@ pub struct SppArgs {
 }
 
 pub fn main(a: &SppArgs) -> Result<()> {
-    let mut systems = Vec::new();
-    for s in a
-        .systems
-        .split(',')
-        .map(str::trim)
-        .filter(|s| !s.is_empty())
-    {
-        let sys = s
-            .chars()
-            .next()
-            .filter(|_| s.len() == 1)
-            .and_then(System::from_letter)
-            .filter(|_| s != " ");
-        match sys {
-            Some(sys) => systems.push(sys),
-            None => bail!("--systems: `{s}` is not a constellation letter (G, R, E, C, J)"),
-        }
-    }
+    let systems = parse_systems(&a.systems).map_err(|e| anyhow!("--systems: {e}"))?;
+    let signals = match &a.signals {
+        Some(x) => parse_codes(x).map_err(|e| anyhow!("--signals: {e}"))?,
+        None => Vec::new(),
+    };
     let job = SppJob {
         obs: a.obs.clone(),
         navs: a.nav.clone(),
         systems,
+        signals,
+        dual_frequency: a.dual_frequency,
+        sp3: a.sp3.clone(),
+        clk: a.clk.clone(),
         elevation_mask_deg: a.elevation_mask,
         broadcast_iono: a.iono == "brdc",
         troposphere: a.tropo == "saas",
         fde: !a.no_fde,
-        elevation_sin_power: if a.rtklib_weights { 1.0 } else { 2.0 },
+        rtklib_weights: a.rtklib_weights,
     };
     let run = run_spp(&job)?;
     for n in &run.notes {

@@ -16,6 +16,8 @@
 
 mod common;
 
+use navfuse_gnss::SatId;
+
 use common::rtklib::{have_rnx2rtkp, run_rnx2rtkp, tmp_dir, RtkEpoch};
 use nalgebra::Vector3;
 use navfuse_core::earth::{c_ne, ecef_to_lla};
@@ -90,8 +92,8 @@ fn rtklib_doppler_offset(s: &SppSolution, ephs: &EphemerisSet) -> Vector3<f64> {
     let v = s.vel_ecef_mps.unwrap_or_default();
     let mut n = nalgebra::Matrix4::<f64>::zeros();
     let mut b = nalgebra::Vector4::<f64>::zeros();
-    for prn in &s.used_prns {
-        let Some(eph) = ephs.select(*prn, s.t) else {
+    for sat in &s.used_sats {
+        let Some(eph) = ephs.select(sat.prn, s.t) else {
             continue;
         };
         let sp = navfuse_gnss::signal_path(eph, &r, &v, s.t_fix);
@@ -507,9 +509,9 @@ fn spp_matches_rnx2rtkp_with_many_satellites_and_a_fault() {
     let excluded: Vec<usize> = sols
         .iter()
         .enumerate()
-        .filter(|(_, s)| !s.excluded_prns.is_empty())
+        .filter(|(_, s)| !s.excluded_sats.is_empty())
         .map(|(k, s)| {
-            assert_eq!(s.excluded_prns, vec![faulty_prn], "epoch {k}");
+            assert_eq!(s.excluded_sats, vec![SatId::gps(faulty_prn)], "epoch {k}");
             k
         })
         .collect();

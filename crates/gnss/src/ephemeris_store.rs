@@ -3,7 +3,9 @@
 //! all systems (healthy, |t - toe| within the system's limit, closest toe; ties to
 //! the later toe, then the later transmission time), so GPS gives the same record.
 //! Galileo: the preferred message (I/NAV by default) when one is in reach, else the
-//! other one.
+//! other one; and of a message the latest record whose toe is not after t, when
+//! there is one (Galileo predicts its orbits ahead from each upload, so a batch is
+//! used from its toe on, as RTKLIB does; the nearest record otherwise).
 //!
 //! [`EphemerisSet::select`]: crate::ephemeris_set::EphemerisSet::select
 
@@ -76,8 +78,12 @@ impl EphemerisStore {
                 GalileoMessage::INav => GalileoMessage::FNav,
                 GalileoMessage::FNav => GalileoMessage::INav,
             };
-            return best(list.iter().filter(of(pref)), t)
-                .or_else(|| best(list.iter().filter(of(other)), t));
+            let galileo = |m: GalileoMessage| {
+                let of_m = || list.iter().filter(of(m));
+                best(of_m().filter(|e| t.diff_s(&e.toe_gpst()) > 0.0), t)
+                    .or_else(|| best(of_m(), t))
+            };
+            return galileo(pref).or_else(|| galileo(other));
         }
         best(list.iter(), t)
     }

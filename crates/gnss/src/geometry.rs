@@ -1,7 +1,9 @@
 //! Signal geometry: light-time iteration, Earth rotation during transit (Sagnac),
 //! range, range rate, line of sight, azimuth and elevation.
 
-use crate::ephemeris::{GpsEphemeris, GPS_OMEGA_E_RAD_PER_S, SPEED_OF_LIGHT_MPS};
+use crate::ephemeris::{
+    Ephemeris, GpsEphemeris, SatState, GPS_OMEGA_E_RAD_PER_S, SPEED_OF_LIGHT_MPS,
+};
 use crate::time::GpsTime;
 use nalgebra::{Matrix3, Vector3};
 use navfuse_core::earth::c_ne;
@@ -50,11 +52,35 @@ fn rot_z_deriv(theta: f64) -> Matrix3<f64> {
     Matrix3::new(-s, c, 0.0, -c, -s, 0.0, 0.0, 0.0, 0.0)
 }
 
+/// Anything that gives a satellite's position, velocity and clock at GPST t in the
+/// ECEF frame at t: a broadcast record of any system, or precise products.
+pub trait SatOrbit {
+    fn sat_state(&self, t: GpsTime) -> SatState;
+}
+
+impl SatOrbit for GpsEphemeris {
+    fn sat_state(&self, t: GpsTime) -> SatState {
+        GpsEphemeris::sat_state(self, t)
+    }
+}
+
+impl SatOrbit for Ephemeris {
+    fn sat_state(&self, t: GpsTime) -> SatState {
+        Ephemeris::sat_state(self, t)
+    }
+}
+
+impl<T: SatOrbit + ?Sized> SatOrbit for &T {
+    fn sat_state(&self, t: GpsTime) -> SatState {
+        (**self).sat_state(t)
+    }
+}
+
 /// Solve the light-time equation t_tx = t_rx - |R(We tau) x_sat(t_tx) - x_rx| / c
 /// (tau = t_rx - t_tx) to < 1e-12 s, for a receiver at `rx_pos_ecef_m` moving with
 /// `rx_vel_ecef_mps` (both ECEF at t_rx).
 pub fn signal_path(
-    eph: &GpsEphemeris,
+    eph: &(impl SatOrbit + ?Sized),
     rx_pos_ecef_m: &Vector3<f64>,
     rx_vel_ecef_mps: &Vector3<f64>,
     t_rx: GpsTime,

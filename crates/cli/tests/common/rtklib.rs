@@ -38,7 +38,8 @@ pub struct RtkEpoch {
     pub vel_enu_mps: Option<Vector3<f64>>,
 }
 
-/// Run rnx2rtkp in single mode with our settings; ECEF output, GPST week/tow.
+/// Run rnx2rtkp in single mode with our settings, GPS only; ECEF output, GPST
+/// week/tow.
 pub fn run_rnx2rtkp(
     dir: &Path,
     name: &str,
@@ -46,6 +47,53 @@ pub fn run_rnx2rtkp(
     nav: &Path,
     iono: &str,
     raim: bool,
+) -> Vec<RtkEpoch> {
+    run_rnx2rtkp_systems(dir, name, obs, nav, iono, raim, 1)
+}
+
+/// RTKLIB's `pos1-navsys` bits: GPS 1, SBAS 2, GLONASS 4, Galileo 8, QZSS 16,
+/// BeiDou 32.
+pub fn navsys(letters: &str) -> u32 {
+    letters
+        .chars()
+        .map(|c| match c {
+            'G' => 1,
+            'S' => 2,
+            'R' => 4,
+            'E' => 8,
+            'J' => 16,
+            'C' => 32,
+            _ => 0,
+        })
+        .sum()
+}
+
+/// The systems rnx2rtkp writes in its `% navi sys` header line for `navsys`.
+fn navsys_names(navsys: u32) -> String {
+    [
+        (1, "gps"),
+        (4, "glonass"),
+        (8, "galileo"),
+        (16, "qzss"),
+        (32, "bds"),
+    ]
+    .iter()
+    .filter(|(b, _)| navsys & b != 0)
+    .map(|(_, n)| *n)
+    .collect::<Vec<_>>()
+    .join(" ")
+}
+
+/// The same with the systems of `navsys` ([`navsys`]).
+#[allow(clippy::too_many_arguments)]
+pub fn run_rnx2rtkp_systems(
+    dir: &Path,
+    name: &str,
+    obs: &Path,
+    nav: &Path,
+    iono: &str,
+    raim: bool,
+    navsys_bits: u32,
 ) -> Vec<RtkEpoch> {
     let conf = dir.join(format!("{name}.conf"));
     let out = dir.join(format!("{name}.pos"));
@@ -63,7 +111,7 @@ pub fn run_rnx2rtkp(
          pos1-tropopt       =saas\n\
          pos1-sateph        =brdc\n\
          pos1-posopt5       ={raim}\n\
-         pos1-navsys        =1\n\
+         pos1-navsys        ={navsys_bits}\n\
          stats-eratio1      =100\n\
          stats-errphase     =0.003\n\
          stats-errphaseel   =0.003\n\
@@ -89,13 +137,16 @@ pub fn run_rnx2rtkp(
         .expect("run rnx2rtkp");
     assert!(status.success(), "rnx2rtkp failed: {status}");
     let text = std::fs::read_to_string(&out).expect("rnx2rtkp output");
-    let navsys = text
+    let sys_line = text
         .lines()
         .find(|l| l.starts_with("% navi sys"))
         .map(|l| l.trim_end().to_string());
+    let want = navsys_names(navsys_bits);
     assert!(
-        navsys.as_deref().is_none_or(|l| l.ends_with(": GPS")),
-        "rnx2rtkp did not take GPS only: {navsys:?}"
+        sys_line
+            .as_deref()
+            .is_none_or(|l| l.to_lowercase().trim_end().ends_with(&want)),
+        "rnx2rtkp did not take {want}: {sys_line:?}"
     );
     // $VELACC,week,tow,stat,ve,vn,vu,... (RTKLIB's estvel: Doppler, after estpos).
     let stat = std::fs::read_to_string(dir.join(format!("{name}.pos.stat"))).unwrap_or_default();

@@ -30,6 +30,18 @@ pub const BEIDOU_MAX_AGE_S: f64 = 6.0 * 3_600.0;
 /// §4.4: the immediate data refer to the middle of the interval).
 pub const GLONASS_MAX_AGE_S: f64 = 15.0 * 60.0;
 
+impl GpsEphemeris {
+    /// `Ephemeris::band_group_delay_s` of an LNAV record of `system` (GPS or QZSS).
+    pub fn band_group_delay_s(&self, system: System, band: u8) -> Option<f64> {
+        let f = |b: u8| crate::signal::carrier_frequency_hz(system, b, None);
+        match band {
+            1 => Some(self.tgd_s),
+            2 | 5 => Some((f(1)? / f(band)?).powi(2) * self.tgd_s),
+            _ => None,
+        }
+    }
+}
+
 /// A broadcast ephemeris of any system.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Ephemeris {
@@ -117,6 +129,46 @@ impl Ephemeris {
             Ephemeris::Galileo(e) => e.group_delay_s(),
             Ephemeris::BeiDou(e) => e.tgd1_s,
             Ephemeris::Glonass(_) => 0.0,
+        }
+    }
+
+    /// Group delay of a signal on `band` (RINEX band digit) relative to the clock
+    /// the record broadcasts \[s\], subtracted from the clock by a single-frequency
+    /// user: GPS/QZSS LNAV (clock of L1/L2 P(Y)) L1 TGD, L2 (f1/f2)^2 TGD
+    /// (IS-GPS-200 20.3.3.3.3.2), L5 taken as (f1/f5)^2 TGD (its ISC is in CNAV, not
+    /// in these records); Galileo I/NAV (clock of E1/E5b) E1 BGD_b, E5b (f1/f7)^2
+    /// BGD_b, E5a BGD_b - BGD_a + (f1/f5)^2 BGD_a, and F/NAV the same with a and b
+    /// exchanged (OS SIS ICD 2.1 §5.1.5); BeiDou D1/D2 (clock of B3I) B1I TGD1, B2I
+    /// TGD2, B3I 0 (B1I ICD 3.0 §5.2.4.8); GLONASS 0. None for a band without a
+    /// delay in the record (BeiDou B1C/B2a, Galileo E6).
+    pub fn band_group_delay_s(&self, band: u8) -> Option<f64> {
+        use crate::signal::carrier_frequency_hz;
+        let sys = self.sat().system;
+        let gamma = |b: u8| -> Option<f64> {
+            let f1 = carrier_frequency_hz(sys, 1, None)?;
+            Some((f1 / carrier_frequency_hz(sys, b, None)?).powi(2))
+        };
+        match self {
+            Ephemeris::Gps(e) | Ephemeris::Qzss(e) => e.band_group_delay_s(sys, band),
+            Ephemeris::Galileo(e) => {
+                let (own, other, own_band) = match e.message() {
+                    GalileoMessage::INav => (e.bgd_e1_e5b_s, e.bgd_e1_e5a_s, 7),
+                    GalileoMessage::FNav => (e.bgd_e1_e5a_s, e.bgd_e1_e5b_s, 5),
+                };
+                match band {
+                    1 => Some(own),
+                    b if b == own_band => Some(gamma(b)? * own),
+                    5 | 7 => Some(own - other + gamma(band)? * other),
+                    _ => None,
+                }
+            }
+            Ephemeris::BeiDou(e) => match band {
+                2 => Some(e.tgd1_s),
+                7 => Some(e.tgd2_s),
+                6 => Some(0.0),
+                _ => None,
+            },
+            Ephemeris::Glonass(_) => Some(0.0),
         }
     }
 

@@ -2,14 +2,9 @@
 //! broadcast URA of IS-GPS-200 20.3.3.3.1.3) and the solver options.
 
 use crate::atmosphere::{klobuchar_l1_delay_m, saastamoinen_slant_m};
-use crate::ephemeris::GpsEphemeris;
+use crate::orbit_source::OrbitAccuracy;
 use nalgebra::Vector3;
-
-/// Upper bounds of the URA index intervals [m] (IS-GPS-200 20.3.3.3.1.3), index 0-14.
-const URA_BOUNDS_M: [f64; 15] = [
-    2.4, 3.4, 4.85, 6.85, 9.65, 13.65, 24.0, 48.0, 96.0, 192.0, 384.0, 768.0, 1536.0, 3072.0,
-    6144.0,
-];
+use navfuse_core::sat::System;
 
 /// Ionospheric correction.
 #[derive(Clone, Debug, PartialEq)]
@@ -42,15 +37,21 @@ pub struct SppErrorModel {
     pub sigma_a_m: f64,
     /// Elevation term b \[m\].
     pub sigma_b_m: f64,
-    /// Error factor F for the system (GPS: 1).
+    /// Error factor F common to all systems (1); each system's own factor
+    /// ([`system_error_factor`]) multiplies it.
     pub error_factor: f64,
     /// Power p of sin(el) in the elevation term b^2 / sin^p el: 2 (default, the
     /// usual model and RTKLIB's manual); RTKLIB 2.4.3's `pntpos` code uses 1, which
     /// reproduces its weights exactly.
     pub elevation_sin_power: f64,
-    /// Add the broadcast user range accuracy squared, the RINEX value rounded up to
-    /// the IS-GPS-200 20.3.3.3.1.3 URA bound (2.4, 3.4, 4.85, ... 6144 m).
+    /// Add the orbit and clock error variance of the record: the broadcast user range
+    /// accuracy squared, the RINEX value rounded up to the IS-GPS-200 20.3.3.3.1.3 URA
+    /// bound (2.4, 3.4, 4.85, ... 6144 m) for GPS, QZSS and BeiDou, the SISA for
+    /// Galileo, 5 m for GLONASS (`orbit_source::broadcast_variance_m2`).
     pub use_ura: bool,
+    /// Galileo SISA as RTKLIB 2.4.3 indexes it (`OrbitAccuracy::variance_m2`), to
+    /// compare with rnx2rtkp; default off (the SISA as broadcast).
+    pub rtklib_sisa: bool,
     /// Code bias (TGD / receiver) error \[m\].
     pub code_bias_sigma_m: f64,
     /// Klobuchar model error as a fraction of the modelled delay.
@@ -78,6 +79,7 @@ impl Default for SppErrorModel {
             error_factor: 1.0,
             elevation_sin_power: 2.0,
             use_ura: true,
+            rtklib_sisa: false,
             code_bias_sigma_m: 0.3,
             iono_model_fraction: 0.5,
             iono_none_sigma_m: 5.0,
@@ -89,11 +91,27 @@ impl Default for SppErrorModel {
     }
 }
 
+/// Each system's code error factor (RTKLIB's EFACT_*: GLONASS 1.5 for its FDMA
+/// inter-frequency code biases and coarser C/A chips, NavIC 1.5, SBAS 3, others 1).
+pub fn system_error_factor(system: System) -> f64 {
+    match system {
+        System::Glonass | System::Navic => 1.5,
+        System::Sbas => 3.0,
+        System::Gps | System::Galileo | System::BeiDou | System::Qzss => 1.0,
+    }
+}
+
 impl SppErrorModel {
-    /// Elevation-dependent measurement variance F^2 (a^2 + b^2 / sin^p el) [m^2].
+    /// Elevation-dependent measurement variance F^2 (a^2 + b^2 / sin^p el) of a GPS
+    /// satellite [m^2].
     pub fn elevation_variance_m2(&self, el_rad: f64) -> f64 {
         let s = el_rad.sin().max(1e-3).powf(self.elevation_sin_power);
         self.error_factor.powi(2) * (self.sigma_a_m.powi(2) + self.sigma_b_m.powi(2) / s)
+    }
+
+    /// The same for a satellite of `system`: times the system's factor squared.
+    pub fn system_elevation_variance_m2(&self, system: System, el_rad: f64) -> f64 {
+        system_error_factor(system).powi(2) * self.elevation_variance_m2(el_rad)
     }
 }
 
@@ -147,22 +165,29 @@ impl SppConfig {
         (iono_m, tropo_m)
     }
 
-    /// A priori pseudorange variance [m^2] of one satellite at `el_rad`:
-    /// F^2 (a^2 + b^2 / sin^p el) + URA^2 + sigma_cb^2 + sigma_I^2 + sigma_T^2, or
-    /// F^2 (a^2 + b^2 / sin^p el) + sigma_DGPS^2 when `dgps` (docs/GNSS.md).
-    /// `iono_m` is the modelled delay (sets sigma_I with Klobuchar).
+    /// A priori pseudorange variance [m^2] of one satellite of `system` at `el_rad`:
+    /// F_sys^2 F^2 (a^2 + b^2 / sin^p el) + sigma_eph^2 + sigma_cb^2 + sigma_I^2 +
+    /// sigma_T^2, or F_sys^2 F^2 (a^2 + b^2 / sin^p el) + sigma_DGPS^2 when `dgps`
+    /// (docs/GNSS.md). `orbit` is the record's stated accuracy (URA, SISA, ...); `iono_m` the modelled delay on the signal (sets sigma_I with
+    /// Klobuchar). An ionosphere-free code (`iono_free`) has 3 times the noise and
+    /// no ionospheric error term.
     pub fn pseudorange_variance_m2(
         &self,
-        eph: &GpsEphemeris,
+        system: System,
+        orbit: &OrbitAccuracy,
         el_rad: f64,
         iono_m: f64,
         dgps: bool,
+        iono_free: bool,
     ) -> f64 {
         let em = &self.errors;
+        let noise_factor = if iono_free { 9.0 } else { 1.0 };
+        let el_var = noise_factor * em.system_elevation_variance_m2(system, el_rad);
         let var = if dgps {
-            em.elevation_variance_m2(el_rad) + em.dgps_sigma_m.powi(2)
+            el_var + em.dgps_sigma_m.powi(2)
         } else {
             let iono_var = match self.iono {
+                _ if iono_free => 0.0,
                 IonoModel::Klobuchar { .. } => (em.iono_model_fraction * iono_m).powi(2),
                 IonoModel::None => em.iono_none_sigma_m.powi(2),
             };
@@ -172,15 +197,11 @@ impl SppConfig {
                 em.tropo_none_sigma_m.powi(2)
             };
             let ura_var = if em.use_ura {
-                ura_variance_m2(eph.sv_accuracy_m)
+                orbit.variance_m2(em.rtklib_sisa)
             } else {
                 0.0
             };
-            em.elevation_variance_m2(el_rad)
-                + ura_var
-                + em.code_bias_sigma_m.powi(2)
-                + iono_var
-                + tropo_var
+            el_var + ura_var + em.code_bias_sigma_m.powi(2) + iono_var + tropo_var
         };
         var.max(1e-6)
     }
@@ -201,19 +222,4 @@ impl Default for SppConfig {
             max_gdop: 30.0,
         }
     }
-}
-
-/// Variance of the broadcast URA: the smallest IS-GPS-200 URA bound at or above the
-/// RINEX value, squared (6144 m for unknown or larger values) [m^2].
-pub(super) fn ura_variance_m2(sv_accuracy_m: f64) -> f64 {
-    let bound = if sv_accuracy_m.is_finite() {
-        URA_BOUNDS_M
-            .iter()
-            .copied()
-            .find(|&b| b >= sv_accuracy_m)
-            .unwrap_or(URA_BOUNDS_M[14])
-    } else {
-        URA_BOUNDS_M[14]
-    };
-    bound * bound
 }

@@ -1,25 +1,31 @@
-//! Single point positioning (SPP) from GPS L1 C/A pseudoranges and Doppler.
+//! Single point positioning (SPP) from the pseudoranges and Dopplers of every
+//! system: GPS, QZSS, Galileo, BeiDou, GLONASS.
 //!
-//! Per epoch: iterated weighted least squares for the receiver position (ECEF) and
-//! clock bias from pseudoranges, then velocity and clock drift from Doppler, with a
-//! residual chi-square test and fault exclusion (FDE). Pure computation; the caller
-//! supplies the measurements and the broadcast ephemerides. See docs/GNSS.md, "Single
-//! point positioning".
+//! Per epoch: iterated weighted least squares for the receiver position (ECEF), the
+//! receiver clock bias and one inter-system bias per further system present, then
+//! velocity and clock drift from Doppler, with a residual chi-square test and fault
+//! exclusion (FDE) across systems. Pure computation; the caller supplies the
+//! measurements and the orbits (`OrbitSource`: broadcast records of any system, or
+//! precise products). See docs/GNSS.md, "Single point positioning".
 //!
 //! Pseudorange model (SYSTEM.md §3b, with the satellite clock subtracted as in
 //! IS-GPS-200 20.3.3.3.3.1-2):
 //!
-//! `P = |R3(We tau) x_sat(t_tx) - x_rx| + c dt_rx - c (dt_sv - TGD) + I + T + eps`
+//! `P = |R3(We tau) x_sat(t_tx) - x_rx| + c dt_rx + ISB_sys - c (dt_sv - TGD) + I + T + eps`
 //!
 //! where dt_sv includes the relativistic term (`SignalPath::sat_clock_bias_s`), TGD is
-//! the L1 C/A group delay (20.3.3.3.3.2), I the Klobuchar delay (20.3.3.5.2.5), T the
-//! Saastamoinen slant delay. The light time is solved for the true reception time
+//! the group delay of the system's first civil signal (GPS TGD 20.3.3.3.3.2, Galileo
+//! BGD, BeiDou TGD1), ISB_sys = 0 for the reference system (GPS and QZSS, else the
+//! first system present), I the Klobuchar delay (20.3.3.5.2.5) scaled to the signal's
+//! frequency by (f_L1 / f)^2 (or 0 for an ionosphere-free code), T the Saastamoinen
+//! slant delay. The light time is solved for the true reception time
 //! `t_rx - dt_rx`, so a receiver clock offset of milliseconds (common with u-blox) does
 //! not bias the satellite positions.
 
 use crate::ephemeris::SPEED_OF_LIGHT_MPS;
 use crate::time::GpsTime;
 use nalgebra::{Matrix4, Vector3};
+use navfuse_core::sat::{SatId, System};
 use std::fmt;
 
 mod config;
@@ -28,7 +34,7 @@ mod solve;
 mod tests;
 mod velocity;
 
-pub use config::{IonoModel, SppConfig, SppErrorModel};
+pub use config::{system_error_factor, IonoModel, SppConfig, SppErrorModel};
 pub use solve::{solve_epoch, SppSolver};
 
 /// GPS L1 carrier frequency \[Hz\] (IS-GPS-200 3.3.1.1).
@@ -36,23 +42,32 @@ pub const GPS_L1_HZ: f64 = 1_575.42e6;
 /// GPS L1 wavelength c / f_L1 \[m\] (0.1903 m).
 pub const GPS_L1_WAVELENGTH_M: f64 = SPEED_OF_LIGHT_MPS / GPS_L1_HZ;
 
-/// Satellites needed to identify (not only detect) one faulty measurement: with
-/// n = 5 the residuals have one degree of freedom and every normalised residual has
-/// the same size, so exclusion needs n >= 6 (and leaves n >= 5, still tested).
-pub const FDE_MIN_SATELLITES: usize = 6;
+/// Redundancy needed to identify (not only detect) one faulty measurement: with
+/// one degree of freedom every normalised residual has the same size, so exclusion
+/// needs n >= unknowns + 2 (GPS alone: 6 satellites), and leaves one still tested.
+pub const FDE_MIN_REDUNDANCY: usize = 2;
 
 /// A receiver position estimate is "near the surface" (elevations and atmosphere make
 /// sense) above this ellipsoidal height [m]; the Earth-centre start is far below it.
 const NEAR_SURFACE_MIN_H_M: f64 = -100e3;
 
-/// One satellite's GPS L1 C/A measurements at one epoch.
+/// One satellite's code (and Doppler) measurement at one epoch.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SppMeasurement {
-    /// GPS PRN.
-    pub prn: u8,
-    /// C1C pseudorange \[m\].
+    pub sat: SatId,
+    /// Pseudorange \[m\]: one signal (e.g. C1C), or an ionosphere-free combination
+    /// when `iono_free`.
     pub pseudorange_m: f64,
-    /// D1C Doppler \[Hz\] (positive when the satellite approaches), if measured.
+    /// Carrier frequency of the signal \[Hz\]: scales the L1 Klobuchar delay by
+    /// (f_L1 / f)^2 and gives the Doppler's wavelength c / f.
+    pub frequency_hz: f64,
+    /// RINEX band of the signal (its group delay, `Ephemeris::band_group_delay_s`).
+    pub band: u8,
+    /// The pseudorange is a dual-frequency ionosphere-free combination of `band` and
+    /// this band: no ionospheric model, the combined group delay, and its noise
+    /// taken 3 times the single-signal noise.
+    pub iono_free_with: Option<u8>,
+    /// Doppler \[Hz\] on `frequency_hz` (positive when the satellite approaches).
     pub doppler_hz: Option<f64>,
     /// DGPS correction to add to the pseudorange, evaluated at this epoch
     /// (prc + rrc (t - t_s), `dgps::DgpsCorrection::at_m`) \[m\]. When present the
@@ -61,10 +76,54 @@ pub struct SppMeasurement {
     pub dgps_prc_m: Option<f64>,
 }
 
+impl SppMeasurement {
+    /// A GPS L1 C/A measurement (C1C, D1C).
+    pub fn gps_l1(prn: u8, pseudorange_m: f64, doppler_hz: Option<f64>) -> Self {
+        SppMeasurement {
+            sat: SatId::gps(prn),
+            pseudorange_m,
+            frequency_hz: GPS_L1_HZ,
+            band: 1,
+            iono_free_with: None,
+            doppler_hz,
+            dgps_prc_m: None,
+        }
+    }
+
+    /// Wavelength of the signal \[m\].
+    pub fn wavelength_m(&self) -> f64 {
+        SPEED_OF_LIGHT_MPS / self.frequency_hz
+    }
+}
+
+impl From<&crate::signal_plan::ChosenSignal> for SppMeasurement {
+    fn from(c: &crate::signal_plan::ChosenSignal) -> Self {
+        SppMeasurement {
+            sat: c.sat,
+            pseudorange_m: c.pseudorange_m,
+            frequency_hz: c.frequency_hz,
+            band: c.code.band(),
+            iono_free_with: c.iono_free_with,
+            doppler_hz: c.doppler_hz,
+            dgps_prc_m: None,
+        }
+    }
+}
+
+/// The receiver clock a system's pseudoranges share: GPS and QZSS (QZSS time is
+/// kept aligned with GPS time, IS-QZSS-PNT §3.2.3) share one; every other system
+/// has its own (its time scale and the receiver's hardware delays differ).
+pub fn clock_group(system: System) -> System {
+    match system {
+        System::Qzss => System::Gps,
+        s => s,
+    }
+}
+
 /// One satellite used in the solution.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SppSatellite {
-    pub prn: u8,
+    pub sat: SatId,
     /// Azimuth from north, clockwise \[rad\].
     pub az_rad: f64,
     /// Elevation \[rad\].
@@ -101,28 +160,35 @@ pub struct SppSolution {
     pub pos_ecef_m: Vector3<f64>,
     /// Latitude \[rad\], longitude \[rad\], ellipsoidal height \[m\].
     pub lla: Vector3<f64>,
-    /// Receiver clock bias c dt_rx \[m\].
+    /// Receiver clock bias c dt_rx \[m\] of the reference system's time scale.
     pub clock_bias_m: f64,
+    /// The reference system: GPS (with QZSS) when present, else the first of
+    /// Galileo, BeiDou, GLONASS, NavIC present.
+    pub reference_system: System,
+    /// Inter-system biases: each further system's receiver clock minus the
+    /// reference clock, c (dt_sys - dt_ref) \[m\], with its 1-sigma \[m\].
+    pub isb_m: Vec<(System, f64, f64)>,
     /// Antenna velocity, ECEF [m/s], when at least 4 used satellites have Doppler.
     pub vel_ecef_mps: Option<Vector3<f64>>,
     /// Receiver clock drift c d(dt_rx)/dt [m/s], with the velocity.
     pub clock_drift_mps: Option<f64>,
     /// Satellites used.
     pub n_used: usize,
-    /// Their PRNs, in input order.
-    pub used_prns: Vec<u8>,
+    /// Them, in input order.
+    pub used_sats: Vec<SatId>,
     /// Satellites excluded by FDE, in exclusion order.
-    pub excluded_prns: Vec<u8>,
+    pub excluded_sats: Vec<SatId>,
     /// Satellites below the elevation mask at the solution.
-    pub masked_prns: Vec<u8>,
+    pub masked_sats: Vec<SatId>,
     /// Satellites without a usable ephemeris (none, unhealthy or outside its fit
     /// interval) or with an invalid pseudorange.
-    pub unusable_prns: Vec<u8>,
+    pub unusable_sats: Vec<SatId>,
     /// Per used satellite: geometry, residuals, corrections.
     pub satellites: Vec<SppSatellite>,
     /// Dilutions of precision.
     pub dops: Dops,
-    /// Covariance of (x, y, z, c dt_rx) from the a priori weights [m^2].
+    /// Covariance of (x, y, z, c dt_rx of the reference system) from the a priori
+    /// weights [m^2].
     pub cov_m2: Matrix4<f64>,
     /// Position 1-sigma north, east, down \[m\] (from `cov_m2`).
     pub std_ned_m: Vector3<f64>,
@@ -130,8 +196,8 @@ pub struct SppSolution {
     pub vel_std_ned_mps: Option<Vector3<f64>>,
     /// Sum of squared weighted residuals.
     pub chi2: f64,
-    /// Chi-square threshold at `chi2_probability` for n - 4 degrees of freedom (None
-    /// with 4 satellites).
+    /// Chi-square threshold at `chi2_probability` for n - 3 - (number of clocks)
+    /// degrees of freedom (None without redundancy).
     pub chi2_threshold: Option<f64>,
     /// Gauss-Newton iterations of the final fit.
     pub iterations: usize,
@@ -141,7 +207,7 @@ pub struct SppSolution {
 #[derive(Clone, Debug, PartialEq)]
 pub enum SppError {
     /// No measurement has a usable ephemeris and pseudorange.
-    NoEphemeris { prns: Vec<u8> },
+    NoEphemeris { sats: Vec<SatId> },
     /// Fewer satellites than needed (after the mask, ephemeris checks and FDE).
     TooFewSatellites { available: usize, required: usize },
     /// The iteration did not converge.
@@ -155,17 +221,17 @@ pub enum SppError {
         chi2: f64,
         threshold: f64,
         n_used: usize,
-        excluded_prns: Vec<u8>,
+        excluded: Vec<SatId>,
     },
 }
 
 impl fmt::Display for SppError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            SppError::NoEphemeris { prns } => {
+            SppError::NoEphemeris { sats } => {
                 write!(f, "no satellite has a usable ephemeris and pseudorange")?;
-                if !prns.is_empty() {
-                    let list: Vec<String> = prns.iter().map(|p| format!("G{p:02}")).collect();
+                if !sats.is_empty() {
+                    let list: Vec<String> = sats.iter().map(|p| p.to_string()).collect();
                     write!(f, " ({})", list.join(" "))?;
                 }
                 Ok(())
@@ -192,16 +258,15 @@ impl fmt::Display for SppError {
                 chi2,
                 threshold,
                 n_used,
-                excluded_prns,
+                excluded,
             } => {
                 write!(
                     f,
                     "residual chi-square test failed: {chi2:.1} > {threshold:.1} \
                      with {n_used} satellites"
                 )?;
-                if !excluded_prns.is_empty() {
-                    let list: Vec<String> =
-                        excluded_prns.iter().map(|p| format!("G{p:02}")).collect();
+                if !excluded.is_empty() {
+                    let list: Vec<String> = excluded.iter().map(|p| p.to_string()).collect();
                     write!(f, " after excluding {}", list.join(" "))?;
                 }
                 Ok(())

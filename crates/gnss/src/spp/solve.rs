@@ -1,35 +1,64 @@
-//! The SPP solver: weighted least squares on the pseudoranges, DOPs, the residual
-//! chi-square test with fault detection and exclusion, and the solution assembly.
+//! The SPP solver: weighted least squares on the pseudoranges of every system (one
+//! clock per clock group, [`clock_group`]), DOPs, the residual chi-square test with
+//! fault detection and exclusion, and the solution assembly.
 
 use super::velocity::solve_velocity;
 use super::{
-    Dops, SppConfig, SppError, SppMeasurement, SppSatellite, SppSolution, FDE_MIN_SATELLITES,
-    NEAR_SURFACE_MIN_H_M,
+    clock_group, Dops, SppConfig, SppError, SppMeasurement, SppSatellite, SppSolution,
+    FDE_MIN_REDUNDANCY, GPS_L1_HZ, NEAR_SURFACE_MIN_H_M,
 };
-use crate::ephemeris::{GpsEphemeris, SPEED_OF_LIGHT_MPS};
-use crate::ephemeris_set::EphemerisSet;
+use crate::ephemeris::SPEED_OF_LIGHT_MPS;
 use crate::geometry::{az_el, signal_path, SignalPath};
+use crate::orbit_source::{OrbitSource, SelectedOrbit};
 use crate::time::GpsTime;
-use nalgebra::{Matrix4, Vector3, Vector4};
+use nalgebra::{Matrix4, SMatrix, SVector, Vector3, Vector4};
 use navfuse_core::chi2::chi2_quantile;
 use navfuse_core::earth::{c_ne, ecef_to_lla};
+use navfuse_core::sat::{SatId, System};
 
-/// A measurement with its ephemeris.
+/// The clock groups, in order of preference for the reference clock.
+pub(super) const CLOCKS: [System; 5] = [
+    System::Gps,
+    System::Galileo,
+    System::BeiDou,
+    System::Glonass,
+    System::Navic,
+];
+/// Unknowns: position and one clock per group.
+const NX: usize = 3 + CLOCKS.len();
+type VecX = SVector<f64, NX>;
+type MatX = SMatrix<f64, NX, NX>;
+
+fn clock_index(system: System) -> Option<usize> {
+    let g = clock_group(system);
+    CLOCKS.iter().position(|&c| c == g)
+}
+
+/// A measurement with its orbit.
 pub(super) struct Candidate<'a> {
-    prn: u8,
+    pub(super) sat: SatId,
+    /// Index into `CLOCKS`.
+    clock: usize,
     /// Measured pseudorange, plus the DGPS correction when `dgps` [m].
     pseudorange_m: f64,
     dgps: bool,
+    iono_free: bool,
+    /// Group delay of the code (`RecordRef::group_delay_s`) [s].
+    group_delay_s: f64,
+    /// (f_L1 / f)^2: the L1 ionospheric delay on this signal.
+    iono_scale: f64,
     pub(super) doppler_hz: Option<f64>,
-    pub(super) eph: &'a GpsEphemeris,
+    pub(super) wavelength_m: f64,
+    pub(super) orbit: SelectedOrbit<'a>,
 }
 
 /// One pseudorange row of the linearised system.
 pub(super) struct Row {
     /// Index into the candidates.
     pub(super) idx: usize,
-    /// Design row d(P)/d(x, y, z, c dt_rx).
-    h: Vector4<f64>,
+    /// Design row d(P)/d(x, y, z, clocks): the reference clock and, for another
+    /// group, its inter-system bias.
+    h: VecX,
     /// Pre-fit residual (measured - modelled) [m].
     v_m: f64,
     var_m2: f64,
@@ -43,14 +72,40 @@ pub(super) struct Row {
 /// A converged fit on one satellite set.
 pub(super) struct Fit {
     pub(super) pos_ecef_m: Vector3<f64>,
+    /// Reference clock [m].
     pub(super) clock_bias_m: f64,
+    /// Index into `CLOCKS` of the reference clock.
+    reference: usize,
+    /// Inter-system bias of each group to the reference (0 when absent) [m].
+    isb_m: [f64; CLOCKS.len()],
     pub(super) rows: Vec<Row>,
     /// Post-fit residuals, one per row [m].
     post_m: Vec<f64>,
-    /// (H^T W H)^-1.
-    cov_m2: Matrix4<f64>,
-    masked: Vec<u8>,
+    /// (H^T W H)^-1 over all unknowns (unit rows for those not estimated).
+    cov_full: MatX,
+    /// Groups with a row.
+    present: [bool; CLOCKS.len()],
+    masked: Vec<SatId>,
     iterations: usize,
+}
+
+impl Fit {
+    /// Unknowns estimated: 3 + the clock groups present.
+    fn unknowns(&self) -> usize {
+        3 + self.present.iter().filter(|p| **p).count()
+    }
+
+    /// Covariance of (x, y, z, reference clock).
+    fn cov4(&self) -> Matrix4<f64> {
+        let mut c = Matrix4::zeros();
+        let k = [0, 1, 2, 3 + self.reference];
+        for i in 0..4 {
+            for j in 0..4 {
+                c[(i, j)] = self.cov_full[(k[i], k[j])];
+            }
+        }
+        c
+    }
 }
 
 /// True reception time: the receiver tag corrected by the clock estimate.
@@ -58,26 +113,38 @@ pub(super) fn true_rx_time(t_rx: GpsTime, clock_bias_m: f64) -> GpsTime {
     t_rx.add_s(-clock_bias_m / SPEED_OF_LIGHT_MPS)
 }
 
-/// Build the pseudorange rows at (pos, clock) for the active candidates.
+/// The state being iterated: position, reference clock, inter-system biases.
+#[derive(Clone, Copy)]
+struct Estimate {
+    pos: Vector3<f64>,
+    clock_m: f64,
+    isb_m: [f64; CLOCKS.len()],
+}
+
+/// Build the pseudorange rows at `x` for the active candidates; `reference` is set
+/// to the first clock group present.
 fn build_rows(
     cands: &[Candidate<'_>],
     active: &[bool],
     cfg: &SppConfig,
     t_rx: GpsTime,
-    pos_ecef_m: &Vector3<f64>,
-    clock_bias_m: f64,
-    masked: &mut Vec<u8>,
-) -> Vec<Row> {
-    let lla = ecef_to_lla(pos_ecef_m);
+    x: &Estimate,
+    masked: &mut Vec<SatId>,
+) -> (Vec<Row>, usize) {
+    let lla = ecef_to_lla(&x.pos);
     let near_surface = lla.z > NEAR_SURFACE_MIN_H_M;
-    let t_true = true_rx_time(t_rx, clock_bias_m);
+    let t_true = true_rx_time(t_rx, x.clock_m);
     masked.clear();
     let mut rows = Vec::with_capacity(cands.len());
     for (idx, c) in cands.iter().enumerate() {
         if !active[idx] {
             continue;
         }
-        let sp: SignalPath = signal_path(c.eph, pos_ecef_m, &Vector3::zeros(), t_true);
+        let sp: SignalPath = signal_path(&c.orbit, &x.pos, &Vector3::zeros(), t_true);
+        if !(sp.geometric_range_m.is_finite() && sp.sat_clock_bias_s.is_finite()) {
+            masked.push(c.sat);
+            continue;
+        }
         // Far from the surface (the Earth-centre start) elevations mean nothing:
         // every satellite is taken, without atmospheric corrections.
         let (az, el) = if near_surface {
@@ -86,23 +153,40 @@ fn build_rows(
             (0.0, std::f64::consts::FRAC_PI_2)
         };
         if near_surface && el < cfg.elevation_mask_rad {
-            masked.push(c.prn);
+            masked.push(c.sat);
             continue;
         }
         // A DGPS-corrected pseudorange already has the atmosphere removed.
-        let (iono_m, tropo_m) = if near_surface && !c.dgps {
+        let (iono_l1_m, tropo_m) = if near_surface && !c.dgps {
             cfg.atmosphere_m(&lla, az, el, t_rx.sow)
         } else {
             (0.0, 0.0)
         };
-        // IS-GPS-200 20.3.3.3.3.2: the L1 C/A user's clock is dt_sv - TGD.
-        let sat_clock_l1_m = SPEED_OF_LIGHT_MPS * (sp.sat_clock_bias_s - c.eph.tgd_s);
-        let modelled = sp.geometric_range_m + clock_bias_m - sat_clock_l1_m + iono_m + tropo_m;
-        let var_m2 = cfg.pseudorange_variance_m2(c.eph, el, iono_m, c.dgps);
+        let iono_m = if c.iono_free {
+            0.0
+        } else {
+            iono_l1_m * c.iono_scale
+        };
+        // IS-GPS-200 20.3.3.3.3.2: the single-frequency user's clock is dt_sv - TGD.
+        let sat_clock_m = SPEED_OF_LIGHT_MPS * (sp.sat_clock_bias_s - c.group_delay_s);
+        let modelled =
+            sp.geometric_range_m + x.clock_m + x.isb_m[c.clock] - sat_clock_m + iono_m + tropo_m;
+        let var_m2 = cfg.pseudorange_variance_m2(
+            c.sat.system,
+            &c.orbit.accuracy,
+            el,
+            iono_m,
+            c.dgps,
+            c.iono_free,
+        );
         let los = sp.los_unit;
+        let mut h = VecX::zeros();
+        h[0] = -los.x;
+        h[1] = -los.y;
+        h[2] = -los.z;
         rows.push(Row {
             idx,
-            h: Vector4::new(-los.x, -los.y, -los.z, 1.0),
+            h,
             v_m: c.pseudorange_m - modelled,
             var_m2,
             az_rad: az,
@@ -112,7 +196,17 @@ fn build_rows(
             los_unit: los,
         });
     }
-    rows
+    let reference = (0..CLOCKS.len())
+        .find(|&k| rows.iter().any(|r| cands[r.idx].clock == k))
+        .unwrap_or(0);
+    for r in &mut rows {
+        let k = cands[r.idx].clock;
+        r.h[3 + reference] = 1.0;
+        if k != reference {
+            r.h[3 + k] = 1.0;
+        }
+    }
+    (rows, reference)
 }
 
 /// Iterated weighted least squares on the active satellites, from (pos, clock).
@@ -124,49 +218,79 @@ pub(super) fn fit(
     start_pos_ecef_m: Vector3<f64>,
     start_clock_bias_m: f64,
 ) -> Result<Fit, SppError> {
-    let required = cfg.min_satellites.max(4);
-    let mut pos = start_pos_ecef_m;
-    let mut clk = start_clock_bias_m;
+    let mut x = Estimate {
+        pos: start_pos_ecef_m,
+        clock_m: start_clock_bias_m,
+        isb_m: [0.0; CLOCKS.len()],
+    };
     let mut masked = Vec::new();
     let mut last_step = f64::INFINITY;
     let max_iter = cfg.max_iterations.max(1);
+    let mut last_reference = None;
     for it in 0..max_iter {
-        let rows = build_rows(cands, active, cfg, t_rx, &pos, clk, &mut masked);
+        let (rows, reference) = build_rows(cands, active, cfg, t_rx, &x, &mut masked);
+        if last_reference.is_some_and(|r| r != reference) {
+            // The reference group changed (its satellites masked): its clock is
+            // now the old clock plus that group's bias.
+            let shift = x.isb_m[reference];
+            x.clock_m += shift;
+            x.isb_m.iter_mut().for_each(|b| *b -= shift);
+        }
+        last_reference = Some(reference);
+        let mut present = [false; CLOCKS.len()];
+        rows.iter().for_each(|r| present[cands[r.idx].clock] = true);
+        let n_clocks = present.iter().filter(|p| **p).count().max(1);
+        let required = cfg.min_satellites.max(3 + n_clocks);
         if rows.len() < required {
             return Err(SppError::TooFewSatellites {
                 available: rows.len(),
                 required,
             });
         }
-        let mut n = Matrix4::zeros();
-        let mut b = Vector4::zeros();
+        let mut n = MatX::zeros();
+        let mut b = VecX::zeros();
         for r in &rows {
             let w = 1.0 / r.var_m2;
             n += r.h * r.h.transpose() * w;
             b += r.h * (r.v_m * w);
         }
+        // Column 3 + reference is the reference clock, 3 + k the bias of group k;
+        // a group without satellites gets a unit row that keeps its bias at zero.
+        for k in 0..CLOCKS.len() {
+            if !present[k] {
+                n[(3 + k, 3 + k)] += 1.0;
+            }
+        }
         let chol = n.cholesky().ok_or(SppError::SingularGeometry)?;
         let dx = chol.solve(&b);
-        if !dx.iter().all(|x| x.is_finite()) {
+        if !dx.iter().all(|v| v.is_finite()) {
             return Err(SppError::SingularGeometry);
         }
-        pos += dx.fixed_rows::<3>(0);
-        clk += dx[3];
+        x.pos += dx.fixed_rows::<3>(0);
+        x.clock_m += dx[3 + reference];
+        for k in 0..CLOCKS.len() {
+            if k != reference {
+                x.isb_m[k] += dx[3 + k];
+            }
+        }
         last_step = dx.norm();
         if last_step < cfg.convergence_m {
             // Post-fit residuals of the linearised system at the converged state.
             let post_m = rows.iter().map(|r| r.v_m - r.h.dot(&dx)).collect();
             return Ok(Fit {
-                pos_ecef_m: pos,
-                clock_bias_m: clk,
+                pos_ecef_m: x.pos,
+                clock_bias_m: x.clock_m,
+                reference,
+                isb_m: x.isb_m,
                 rows,
                 post_m,
-                cov_m2: chol.inverse(),
+                cov_full: chol.inverse(),
+                present,
                 masked,
                 iterations: it + 1,
             });
         }
-        if !pos.iter().all(|x| x.is_finite()) || pos.norm() > 1e9 {
+        if !x.pos.iter().all(|v| v.is_finite()) || x.pos.norm() > 1e9 {
             break;
         }
     }
@@ -176,7 +300,8 @@ pub(super) fn fit(
     })
 }
 
-/// DOPs from the used lines of sight (unit weights), in NED at `lla`.
+/// DOPs from the used lines of sight (unit weights, one common clock as the usual
+/// definition), in NED at `lla`.
 pub(super) fn dops(rows: &[Row], lla: &Vector3<f64>) -> Option<Dops> {
     let c_en = c_ne(lla.x, lla.y).transpose();
     let mut n = Matrix4::zeros();
@@ -202,35 +327,48 @@ pub(super) fn dops(rows: &[Row], lla: &Vector3<f64>) -> Option<Dops> {
 /// the previous solution; `None` starts at the Earth centre with zero clock. A fit
 /// that fails from `start` is retried from the Earth centre.
 pub fn solve_epoch(
-    ephs: &EphemerisSet,
+    orbits: &(impl OrbitSource + ?Sized),
     t_rx: GpsTime,
     meas: &[SppMeasurement],
     cfg: &SppConfig,
     start: Option<(Vector3<f64>, f64)>,
 ) -> Result<SppSolution, SppError> {
-    // Candidates: valid pseudorange, a usable ephemeris, first occurrence of a PRN.
+    // Candidates: valid pseudorange, a usable orbit, first occurrence of a satellite.
     let mut cands: Vec<Candidate<'_>> = Vec::with_capacity(meas.len());
     let mut unusable = Vec::new();
     for m in meas {
-        if cands.iter().any(|c| c.prn == m.prn) {
+        if cands.iter().any(|c| c.sat == m.sat) {
             continue;
         }
         let pr_ok = m.pseudorange_m.is_finite()
             && m.pseudorange_m > 0.0
+            && m.frequency_hz.is_finite()
+            && m.frequency_hz > 0.0
             && m.dgps_prc_m.is_none_or(f64::is_finite);
-        match ephs.select(m.prn, t_rx) {
-            Some(eph) if pr_ok => cands.push(Candidate {
-                prn: m.prn,
+        let clock = clock_index(m.sat.system);
+        let orbit = orbits.select(m.sat, t_rx);
+        let group_delay = orbit.and_then(|o| {
+            o.record
+                .group_delay_s(m.sat.system, m.band, m.iono_free_with)
+        });
+        match (orbit, clock, group_delay) {
+            (Some(orbit), Some(clock), Some(group_delay_s)) if pr_ok => cands.push(Candidate {
+                sat: m.sat,
+                clock,
                 pseudorange_m: m.pseudorange_m + m.dgps_prc_m.unwrap_or(0.0),
                 dgps: m.dgps_prc_m.is_some(),
+                iono_free: m.iono_free_with.is_some(),
+                group_delay_s,
+                iono_scale: (GPS_L1_HZ / m.frequency_hz).powi(2),
                 doppler_hz: m.doppler_hz,
-                eph,
+                wavelength_m: m.wavelength_m(),
+                orbit,
             }),
-            _ => unusable.push(m.prn),
+            _ => unusable.push(m.sat),
         }
     }
     if cands.is_empty() {
-        return Err(SppError::NoEphemeris { prns: unusable });
+        return Err(SppError::NoEphemeris { sats: unusable });
     }
     let required = cfg.min_satellites.max(4);
     if cands.len() < required {
@@ -241,7 +379,7 @@ pub fn solve_epoch(
     }
 
     let mut active = vec![true; cands.len()];
-    let mut excluded: Vec<u8> = Vec::new();
+    let mut excluded: Vec<SatId> = Vec::new();
     let (mut pos0, mut clk0) = start
         .filter(|(p, c)| p.iter().all(|x| x.is_finite()) && c.is_finite())
         .unwrap_or((Vector3::zeros(), 0.0));
@@ -255,32 +393,35 @@ pub fn solve_epoch(
             r => r,
         }?;
         let n_used = fitted.rows.len();
+        let unknowns = fitted.unknowns();
         let chi2: f64 = fitted
             .rows
             .iter()
             .zip(&fitted.post_m)
             .map(|(r, v)| v * v / r.var_m2)
             .sum();
-        let threshold = (n_used > 4).then(|| chi2_quantile(n_used - 4, cfg.chi2_probability));
+        let threshold =
+            (n_used > unknowns).then(|| chi2_quantile(n_used - unknowns, cfg.chi2_probability));
         if let (true, Some(thr)) = (cfg.fde, threshold) {
             if chi2 > thr {
-                if n_used < FDE_MIN_SATELLITES {
+                if n_used < unknowns + FDE_MIN_REDUNDANCY {
                     return Err(SppError::ResidualTestFailed {
                         chi2,
                         threshold: thr,
                         n_used,
-                        excluded_prns: excluded,
+                        excluded,
                     });
                 }
                 // Exclude the largest normalised residual |v_i| / sqrt(Q_v,ii),
-                // Q_v = R - H (H^T W H)^-1 H^T (Baarda's w-test).
+                // Q_v = R - H (H^T W H)^-1 H^T (Baarda's w-test). A group's only
+                // satellite has Q_v = 0 (its bias absorbs it) and is not tested.
                 let worst = fitted
                     .rows
                     .iter()
                     .zip(&fitted.post_m)
                     .enumerate()
                     .filter_map(|(k, (r, v))| {
-                        let qv = r.var_m2 - (r.h.transpose() * fitted.cov_m2 * r.h)[0];
+                        let qv = r.var_m2 - (r.h.transpose() * fitted.cov_full * r.h)[0];
                         (qv > 1e-9 * r.var_m2).then(|| (k, v.abs() / qv.sqrt()))
                     })
                     .max_by(|a, b| a.1.total_cmp(&b.1));
@@ -289,12 +430,12 @@ pub fn solve_epoch(
                         chi2,
                         threshold: thr,
                         n_used,
-                        excluded_prns: excluded,
+                        excluded,
                     });
                 };
                 let idx = fitted.rows[k].idx;
                 active[idx] = false;
-                excluded.push(cands[idx].prn);
+                excluded.push(cands[idx].sat);
                 pos0 = fitted.pos_ecef_m;
                 clk0 = fitted.clock_bias_m;
                 continue;
@@ -311,8 +452,8 @@ pub fn solve_epoch(
 fn finish(
     cands: &[Candidate<'_>],
     fitted: Fit,
-    excluded: Vec<u8>,
-    unusable: Vec<u8>,
+    excluded: Vec<SatId>,
+    unusable: Vec<SatId>,
     cfg: &SppConfig,
     t_rx: GpsTime,
     chi2: f64,
@@ -326,8 +467,9 @@ fn finish(
             max_gdop: cfg.max_gdop,
         });
     }
+    let cov_m2 = fitted.cov4();
     let c = c_ne(lla.x, lla.y);
-    let p_ned = c.transpose() * fitted.cov_m2.fixed_view::<3, 3>(0, 0) * c;
+    let p_ned = c.transpose() * cov_m2.fixed_view::<3, 3>(0, 0) * c;
     let std_ned_m = p_ned.diagonal().map(|x| x.max(0.0).sqrt());
     let velocity = solve_velocity(cands, &fitted, t_rx, cfg.errors.doppler_sigma_hz, &lla);
     let rr_res = velocity.as_ref().map(|v| &v.range_rate_residuals_mps);
@@ -337,7 +479,7 @@ fn finish(
         .zip(&fitted.post_m)
         .enumerate()
         .map(|(k, (r, v))| SppSatellite {
-            prn: cands[r.idx].prn,
+            sat: cands[r.idx].sat,
             az_rad: r.az_rad,
             el_rad: r.el_rad,
             residual_m: *v,
@@ -347,22 +489,31 @@ fn finish(
             range_rate_residual_mps: rr_res.and_then(|x| x[k]),
         })
         .collect();
+    let isb_m = (0..CLOCKS.len())
+        .filter(|&k| fitted.present[k] && k != fitted.reference)
+        .map(|k| {
+            let var = fitted.cov_full[(3 + k, 3 + k)];
+            (CLOCKS[k], fitted.isb_m[k], var.max(0.0).sqrt())
+        })
+        .collect();
     Ok(SppSolution {
         t: t_rx,
         t_fix: true_rx_time(t_rx, fitted.clock_bias_m),
         pos_ecef_m: fitted.pos_ecef_m,
         lla,
         clock_bias_m: fitted.clock_bias_m,
+        reference_system: CLOCKS[fitted.reference],
+        isb_m,
         vel_ecef_mps: velocity.as_ref().map(|v| v.vel_ecef_mps),
         clock_drift_mps: velocity.as_ref().map(|v| v.clock_drift_mps),
         n_used: satellites.len(),
-        used_prns: satellites.iter().map(|s| s.prn).collect(),
-        excluded_prns: excluded,
-        masked_prns: fitted.masked,
-        unusable_prns: unusable,
+        used_sats: satellites.iter().map(|s| s.sat).collect(),
+        excluded_sats: excluded,
+        masked_sats: fitted.masked,
+        unusable_sats: unusable,
         satellites,
         dops,
-        cov_m2: fitted.cov_m2,
+        cov_m2,
         std_ned_m,
         vel_std_ned_mps: velocity.as_ref().map(|v| v.std_ned_mps),
         chi2,
@@ -386,11 +537,11 @@ impl SppSolver {
     /// Solve one epoch, starting from the last solution (or the Earth centre).
     pub fn solve(
         &mut self,
-        ephs: &EphemerisSet,
+        orbits: &(impl OrbitSource + ?Sized),
         t_rx: GpsTime,
         meas: &[SppMeasurement],
     ) -> Result<SppSolution, SppError> {
-        let r = solve_epoch(ephs, t_rx, meas, &self.config, self.last);
+        let r = solve_epoch(orbits, t_rx, meas, &self.config, self.last);
         if let Ok(s) = &r {
             self.last = Some((s.pos_ecef_m, s.clock_bias_m));
         }

@@ -1,13 +1,14 @@
 //! Tests of SPP on a synthetic constellation.
 
-use super::config::ura_variance_m2;
 use super::*;
 use crate::atmosphere::{klobuchar_l1_delay_m, saastamoinen_slant_m};
 use crate::constellation::nominal_gps24;
 use crate::ephemeris_set::EphemerisSet;
 use crate::geometry::{az_el, signal_path};
+use crate::orbit_source::ura_variance_m2;
 use navfuse_core::earth::c_ne;
 use navfuse_core::earth::lla_to_ecef;
+use navfuse_core::sat::SatId;
 
 const ALPHA: [f64; 4] = [1.1176e-8, 1.4901e-8, -5.9605e-8, -1.1921e-7];
 const BETA: [f64; 4] = [1.1469e5, 8.1920e4, -1.3107e5, -5.2429e5];
@@ -69,12 +70,11 @@ fn measure(ephs: &EphemerisSet, t_rx: GpsTime, tr: &Truth, mask_deg: f64) -> Vec
             + tropo;
         let rr = sp.range_rate_mps + tr.clock_drift_mps
             - SPEED_OF_LIGHT_MPS * sp.sat_clock_drift_s_per_s;
-        out.push(SppMeasurement {
+        out.push(SppMeasurement::gps_l1(
             prn,
-            pseudorange_m: pr,
-            doppler_hz: Some(-rr / GPS_L1_WAVELENGTH_M),
-            dgps_prc_m: None,
-        });
+            pr,
+            Some(-rr / GPS_L1_WAVELENGTH_M),
+        ));
     }
     out
 }
@@ -113,10 +113,10 @@ fn recovers_position_velocity_and_clock_without_noise() {
         tr.vel_ecef_mps
     );
     assert!((sol.clock_drift_mps.unwrap() - tr.clock_drift_mps).abs() < 1e-3);
-    assert!(sol.excluded_prns.is_empty());
+    assert!(sol.excluded_sats.is_empty());
     assert!(sol.chi2 < 1e-6);
     // Satellites between 5 and 10 deg are measured but masked.
-    assert_eq!(sol.n_used + sol.masked_prns.len(), meas.len());
+    assert_eq!(sol.n_used + sol.masked_sats.len(), meas.len());
     assert!(sol
         .satellites
         .iter()
@@ -145,12 +145,12 @@ fn dgps_corrections_replace_the_models() {
     // atmosphere; satellites without one keep the models.
     let (ephs, t_rx, tr, meas) = setup();
     let clean = solve_epoch(&ephs, t_rx, &meas, &config(), None).unwrap();
-    let corrected: Vec<u8> = clean.used_prns.iter().copied().step_by(2).collect();
+    let corrected: Vec<SatId> = clean.used_sats.iter().copied().step_by(2).collect();
     let dgps: Vec<SppMeasurement> = meas
         .iter()
-        .map(|m| match clean.satellites.iter().find(|s| s.prn == m.prn) {
-            Some(s) if corrected.contains(&m.prn) => {
-                let err = 4.0 * f64::from(m.prn).sin();
+        .map(|m| match clean.satellites.iter().find(|s| s.sat == m.sat) {
+            Some(s) if corrected.contains(&m.sat) => {
+                let err = 4.0 * f64::from(m.sat.prn).sin();
                 SppMeasurement {
                     pseudorange_m: m.pseudorange_m + err,
                     dgps_prc_m: Some(-(err + s.iono_m + s.tropo_m)),
@@ -163,11 +163,11 @@ fn dgps_corrections_replace_the_models() {
     let sol = solve_epoch(&ephs, t_rx, &dgps, &config(), None).unwrap();
     assert!((sol.pos_ecef_m - tr.pos_ecef_m).norm() < 1e-3);
     assert!((sol.clock_bias_m - tr.clock_bias_m).abs() < 1e-3);
-    assert_eq!(sol.used_prns, clean.used_prns);
+    assert_eq!(sol.used_sats, clean.used_sats);
     let em = &config().errors;
     for s in &sol.satellites {
-        let dgps = corrected.contains(&s.prn);
-        assert_eq!(dgps, s.iono_m == 0.0 && s.tropo_m == 0.0, "G{:02}", s.prn);
+        let dgps = corrected.contains(&s.sat);
+        assert_eq!(dgps, s.iono_m == 0.0 && s.tropo_m == 0.0, "{}", s.sat);
         if dgps {
             let var = em.elevation_variance_m2(s.el_rad) + em.dgps_sigma_m.powi(2);
             assert!((s.sigma_m - var.sqrt()).abs() < 1e-12);
@@ -177,7 +177,7 @@ fn dgps_corrections_replace_the_models() {
     let mut bad = dgps.clone();
     bad[0].dgps_prc_m = Some(f64::NAN);
     let sol = solve_epoch(&ephs, t_rx, &bad, &config(), None).unwrap();
-    assert_eq!(sol.unusable_prns, vec![bad[0].prn]);
+    assert_eq!(sol.unusable_sats, vec![bad[0].sat]);
 }
 
 #[test]
@@ -204,14 +204,14 @@ fn fde_excludes_a_biased_satellite() {
     let (ephs, t_rx, tr, mut meas) = setup();
     let cfg = config();
     let clean = solve_epoch(&ephs, t_rx, &meas, &cfg, None).unwrap();
-    assert!(clean.n_used > FDE_MIN_SATELLITES, "{}", clean.n_used);
+    assert!(clean.n_used > 4 + FDE_MIN_REDUNDANCY, "{}", clean.n_used);
     for k in 0..clean.n_used {
-        let bad = clean.used_prns[k];
-        let m = meas.iter_mut().find(|m| m.prn == bad).unwrap();
+        let bad = clean.used_sats[k];
+        let m = meas.iter_mut().find(|m| m.sat == bad).unwrap();
         m.pseudorange_m += 100.0;
         let sol = solve_epoch(&ephs, t_rx, &meas, &cfg, None).unwrap();
-        assert_eq!(sol.excluded_prns, vec![bad]);
-        assert!(!sol.used_prns.contains(&bad));
+        assert_eq!(sol.excluded_sats, vec![bad]);
+        assert!(!sol.used_sats.contains(&bad));
         assert!((sol.pos_ecef_m - tr.pos_ecef_m).norm() < 1e-3);
         assert!(sol.chi2 <= sol.chi2_threshold.unwrap());
         // Without FDE the bias goes into the solution.
@@ -222,7 +222,7 @@ fn fde_excludes_a_biased_satellite() {
         let sol = solve_epoch(&ephs, t_rx, &meas, &raw, None).unwrap();
         assert!((sol.pos_ecef_m - tr.pos_ecef_m).norm() > 1.0);
         assert!(sol.chi2 > sol.chi2_threshold.unwrap());
-        let m = meas.iter_mut().find(|m| m.prn == bad).unwrap();
+        let m = meas.iter_mut().find(|m| m.sat == bad).unwrap();
         m.pseudorange_m -= 100.0;
     }
 }
@@ -231,10 +231,10 @@ fn fde_excludes_a_biased_satellite() {
 fn fde_with_five_satellites_detects_but_cannot_exclude() {
     let (ephs, t_rx, _, meas) = setup();
     let clean = solve_epoch(&ephs, t_rx, &meas, &config(), None).unwrap();
-    let keep: Vec<u8> = clean.used_prns[..5].to_vec();
+    let keep: Vec<SatId> = clean.used_sats[..5].to_vec();
     let mut five: Vec<SppMeasurement> = meas
         .iter()
-        .filter(|m| keep.contains(&m.prn))
+        .filter(|m| keep.contains(&m.sat))
         .copied()
         .collect();
     five[2].pseudorange_m += 100.0;
@@ -263,29 +263,23 @@ fn errors_instead_of_panics() {
     // Unknown PRNs, NaN and zero pseudoranges: nothing usable.
     let junk = [
         SppMeasurement {
-            prn: 31,
             pseudorange_m: 2.1e7,
-            doppler_hz: None,
-            dgps_prc_m: None,
+            ..SppMeasurement::gps_l1(31, 0.0, None)
         },
         SppMeasurement {
-            prn: 1,
             pseudorange_m: f64::NAN,
-            doppler_hz: None,
-            dgps_prc_m: None,
+            ..SppMeasurement::gps_l1(1, 0.0, None)
         },
         SppMeasurement {
-            prn: 2,
             pseudorange_m: 0.0,
-            doppler_hz: None,
-            dgps_prc_m: None,
+            ..SppMeasurement::gps_l1(2, 0.0, None)
         },
     ];
     let e = solve_epoch(&ephs, t_rx, &junk, &cfg, None).unwrap_err();
     assert_eq!(
         e,
         SppError::NoEphemeris {
-            prns: vec![31, 1, 2]
+            sats: vec![SatId::gps(31), SatId::gps(1), SatId::gps(2)]
         }
     );
     assert!(e.to_string().contains("G31 G01 G02"), "{e}");

@@ -1,7 +1,6 @@
 //! Velocity and receiver clock drift from Doppler on the satellites of a fit.
 
 use super::solve::{true_rx_time, Candidate, Fit};
-use super::GPS_L1_WAVELENGTH_M;
 use crate::ephemeris::SPEED_OF_LIGHT_MPS;
 use crate::geometry::signal_path;
 use crate::time::GpsTime;
@@ -17,8 +16,9 @@ pub(super) struct Velocity {
     pub(super) range_rate_residuals_mps: Vec<Option<f64>>,
 }
 
-/// Velocity and clock drift from Doppler on the used satellites: range rate
-/// -lambda_L1 D = los . (v_sat - v_rx) + c (d(dt_rx)/dt - d(dt_sv)/dt) (SYSTEM.md §3b
+/// Velocity and clock drift from Doppler on the used satellites (one drift for all
+/// systems: their clocks differ by a near-constant bias): range rate
+/// -lambda D = los . (v_sat - v_rx) + c (d(dt_rx)/dt - d(dt_sv)/dt) (SYSTEM.md §3b
 /// eq. 16-18 with the clock drifts). Needs 4 satellites with Doppler.
 pub(super) fn solve_velocity(
     cands: &[Candidate<'_>],
@@ -53,8 +53,8 @@ pub(super) fn solve_velocity(
         let mut rows = Vec::with_capacity(with_doppler.len());
         for &(k, d_hz) in &with_doppler {
             let c = &cands[fit.rows[k].idx];
-            let sp = signal_path(c.eph, &fit.pos_ecef_m, &vel, t_true);
-            let measured = -GPS_L1_WAVELENGTH_M * d_hz;
+            let sp = signal_path(&c.orbit, &fit.pos_ecef_m, &vel, t_true);
+            let measured = -c.wavelength_m * d_hz;
             let modelled =
                 sp.range_rate_mps + drift - SPEED_OF_LIGHT_MPS * sp.sat_clock_drift_s_per_s;
             let h = Vector4::new(-sp.los_unit.x, -sp.los_unit.y, -sp.los_unit.z, 1.0);
@@ -78,7 +78,7 @@ pub(super) fn solve_velocity(
             break;
         }
     }
-    let sigma_mps = doppler_sigma_hz * GPS_L1_WAVELENGTH_M;
+    let sigma_mps = doppler_sigma_hz * super::GPS_L1_WAVELENGTH_M;
     let c = c_ne(lla.x, lla.y);
     let p_ned: Matrix3<f64> =
         c.transpose() * n_inv.fixed_view::<3, 3>(0, 0) * c * (sigma_mps * sigma_mps);

@@ -20,6 +20,7 @@ use crate::ephemeris::SPEED_OF_LIGHT_MPS;
 use crate::ephemeris_set::EphemerisSet;
 use crate::geometry::{az_el, signal_path};
 use crate::obs::{ObsEpoch, SatObs};
+use crate::orbit_source::OrbitAccuracy;
 use crate::spp::{
     solve_epoch, SppConfig, SppError, SppErrorModel, SppMeasurement, SppSolution,
     GPS_L1_WAVELENGTH_M,
@@ -27,6 +28,7 @@ use crate::spp::{
 use crate::time::{GpsTime, SECONDS_PER_WEEK};
 use nalgebra::Vector3;
 use navfuse_core::earth::{c_ne, ecef_to_lla};
+use navfuse_core::sat::System;
 use navfuse_core::{GnssFix, GnssRawEpoch, SatMeasurement};
 
 #[cfg(test)]
@@ -183,14 +185,13 @@ impl EpochPreparer {
                 .iter()
                 .zip(&corrs)
                 .filter_map(|(s, corr)| {
+                    // range rate -lambda D + rrc: the DGPS rate enters the velocity
+                    let doppler_hz = s
+                        .doppler_hz
+                        .map(|d| d - corr.map_or(0.0, |k| k.rrc_mps) / GPS_L1_WAVELENGTH_M);
                     Some(SppMeasurement {
-                        prn: s.prn,
-                        pseudorange_m: s.pseudorange_m?,
-                        // range rate -lambda D + rrc: the DGPS rate enters the velocity
-                        doppler_hz: s
-                            .doppler_hz
-                            .map(|d| d - corr.map_or(0.0, |k| k.rrc_mps) / GPS_L1_WAVELENGTH_M),
                         dgps_prc_m: corr.map(|k| k.at_m(t_est_s) - model_diff(s.prn)),
+                        ..SppMeasurement::gps_l1(s.prn, s.pseudorange_m?, doppler_hz)
                     })
                 })
                 .collect()
@@ -391,7 +392,14 @@ impl EpochPreparer {
                     None => -iono_m - tropo_m,
                 }
         });
-        let pr_var = cfg.pseudorange_variance_m2(eph, el, iono_m, corr.is_some());
+        let pr_var = cfg.pseudorange_variance_m2(
+            System::Gps,
+            &OrbitAccuracy::Ura(eph.sv_accuracy_m),
+            el,
+            iono_m,
+            corr.is_some(),
+            false,
+        );
         let em = &cfg.errors;
         let el_scale = (em.elevation_variance_m2(el)
             / em.elevation_variance_m2(std::f64::consts::FRAC_PI_2))
