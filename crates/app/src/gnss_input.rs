@@ -1,18 +1,22 @@
-//! RINEX GNSS input for the run pipeline: observations and broadcast ephemerides (and
-//! DGPS corrections) go through the GNSS layer (`navfuse_gnss::tight_prep`) and come
-//! out as single point fixes (loose coupling) or per-satellite epochs (tight).
+//! RINEX GNSS input for the run pipeline: observations of the configured systems and
+//! signals, broadcast ephemerides or precise products (and DGPS corrections) go
+//! through the GNSS layer (`navfuse_gnss::tight_prep`) and come out as single point
+//! fixes (loose coupling) or per-satellite epochs (tight).
 
 use crate::Error;
 use nalgebra::Vector3;
 use navfuse_core::earth::lla_to_ecef;
+use navfuse_core::sat::System;
 use navfuse_core::{GnssFix, GnssRawEpoch};
 use navfuse_gnss::dgps::{corrections_from_reference_station, DgpsCorrections};
+use navfuse_gnss::orbit_source::RunOrbits;
+use navfuse_gnss::signal_plan::SignalPlan;
 use navfuse_gnss::spp::{IonoModel, SppConfig};
 use navfuse_gnss::tight_prep::{EpochPreparer, TightPrepConfig};
 use navfuse_gnss::{EphemerisSet, ObsEpoch};
-use navfuse_io::input::{DgpsKind, GnssSource, RinexGnss};
+use navfuse_io::input::{DgpsKind, GnssSource, Orbits, RinexGnss};
 use navfuse_io::rinex_nav::read_rinex_nav;
-use navfuse_io::rinex_obs::{read_rinex_obs, read_rinex_obs_report};
+use navfuse_io::rinex_obs::{read_rinex_obs, read_rinex_obs_all};
 
 /// What the GNSS layer made of a RINEX input. Times are seconds of `gps_week`
 /// (the first observation's week) plus the source's time offset.
@@ -43,24 +47,46 @@ pub fn prep_config(r: &RinexGnss, iono: IonoModel) -> TightPrepConfig {
     }
 }
 
-/// Read the observations, navigation data and DGPS source of a RINEX input and
-/// prepare every epoch.
+/// Read the observations, navigation data (or precise products) and DGPS source of
+/// a RINEX input and prepare every epoch of the systems `systems`.
 pub fn load_rinex(src: &GnssSource, r: &RinexGnss) -> Result<RinexInput, Error> {
+    let systems = vec![System::Gps];
     let nav = read_rinex_nav(&r.nav_path)?;
-    if nav.gps.is_empty() {
+    let broadcast = nav.store();
+    let counts = broadcast.counts();
+    if !systems.iter().any(|s| counts.contains_key(s)) {
         return Err(Error::Other(format!(
-            "{}: no GPS ephemerides",
-            r.nav_path.display()
+            "{}: no ephemerides of {}",
+            r.nav_path.display(),
+            systems
+                .iter()
+                .map(|s| s.name())
+                .collect::<Vec<_>>()
+                .join(", ")
         )));
     }
     let iono = IonoModel::from_broadcast(nav.iono_alpha, nav.iono_beta);
-    let ephs = EphemerisSet::new(nav.gps);
-    let obs = read_rinex_obs_report(&src.path)?;
+    // DGPS corrections from a reference station are computed for GPS.
+    let gps_ephs = EphemerisSet::new(nav.gps);
+    let orbits = match &r.orbits {
+        Orbits::Broadcast => RunOrbits::Broadcast(broadcast),
+        Orbits::Sp3 { sp3, clk } => RunOrbits::Precise {
+            products: crate::spp::read_precise(sp3, clk)?,
+            broadcast,
+        },
+    };
+    let plan = SignalPlan {
+        systems: systems.clone(),
+        codes: r.signals.clone(),
+        dual_frequency: r.dual_frequency,
+    };
+    let obs = read_rinex_obs_all(&src.path)?;
     let mut warnings: Vec<String> = nav.warnings.iter().chain(&obs.warnings).cloned().collect();
+    let channels = crate::spp::glonass_channels(&obs.header, orbits.broadcast());
     let epochs = obs.epochs;
     let Some(week) = epochs.first().map(|e| e.t.week) else {
         return Err(Error::Other(format!(
-            "{}: no GPS observation epochs",
+            "{}: no observation epochs",
             src.path.display()
         )));
     };
@@ -85,7 +111,7 @@ pub fn load_rinex(src: &GnssSource, r: &RinexGnss) -> Result<RinexInput, Error> 
             let ref_ecef = lla_to_ecef(&Vector3::from(*position_lla));
             Some(
                 DgpsCorrections::new(corrections_from_reference_station(
-                    &ephs,
+                    &gps_ephs,
                     &base,
                     ref_ecef,
                     cfg.spp.elevation_mask_rad,
@@ -95,7 +121,7 @@ pub fn load_rinex(src: &GnssSource, r: &RinexGnss) -> Result<RinexInput, Error> 
         }
     };
     let have_dgps = dgps.is_some();
-    let mut prep = EpochPreparer::new(ephs, cfg, dgps);
+    let mut prep = EpochPreparer::new(orbits, cfg, dgps);
     let mut out = RinexInput {
         fixes: Vec::new(),
         raw: Vec::with_capacity(epochs.len()),
@@ -105,7 +131,8 @@ pub fn load_rinex(src: &GnssSource, r: &RinexGnss) -> Result<RinexInput, Error> 
     };
     let (mut no_fix, mut dgps_applied, mut dgps_missing) = (0usize, 0usize, 0usize);
     for e in &epochs {
-        let mut p = prep.prepare(e, week);
+        let chosen = crate::spp::choose_signals(e, &plan, &channels);
+        let mut p = prep.prepare_signals(e.t, e.flag, &chosen, week);
         p.raw.t += src.time_offset_s;
         if let Some(f) = p.raw.fix.as_mut() {
             f.t += src.time_offset_s;

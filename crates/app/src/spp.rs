@@ -8,7 +8,7 @@ use navfuse_core::earth::c_ne;
 use navfuse_core::sat::System;
 use navfuse_gnss::obs::ObsSignalsHeader;
 use navfuse_gnss::precise::PreciseProducts;
-use navfuse_gnss::signal_plan::SignalPlan;
+use navfuse_gnss::signal_plan::{ChosenSignal, SignalPlan};
 use navfuse_gnss::spp::{IonoModel, SppConfig, SppError, SppMeasurement, SppSolution, SppSolver};
 use navfuse_gnss::{
     Ephemeris, EphemerisSet, EphemerisStore, GpsTime, MultiObsEpoch, ObsCode, OrbitSource,
@@ -256,16 +256,30 @@ pub fn solve_multi(
 ) -> Vec<(GpsTime, Result<SppSolution, SppError>)> {
     let channels = glonass_channels(header, broadcast);
     solve_each(obs, orbits, cfg, |e| {
-        e.sats
+        choose_signals(e, plan, &channels)
             .iter()
-            .filter_map(|s| {
-                let k = (s.sat.system == System::Glonass)
-                    .then(|| channels.get(usize::from(s.sat.prn)).copied().flatten())
-                    .flatten();
-                plan.choose(s, k).map(|c| SppMeasurement::from(&c))
-            })
+            .filter(|c| c.pseudorange_m.is_finite())
+            .map(SppMeasurement::from)
             .collect()
     })
+}
+
+/// The plan's signal of every satellite of an epoch (`channels`: GLONASS channel by
+/// slot, [`glonass_channels`]).
+pub fn choose_signals(
+    e: &MultiObsEpoch,
+    plan: &SignalPlan,
+    channels: &[Option<i8>],
+) -> Vec<ChosenSignal> {
+    e.sats
+        .iter()
+        .filter_map(|s| {
+            let k = (s.sat.system == System::Glonass)
+                .then(|| channels.get(usize::from(s.sat.prn)).copied().flatten())
+                .flatten();
+            plan.choose(s, k)
+        })
+        .collect()
 }
 
 /// Solve the epochs in order, each from the previous solution, with the

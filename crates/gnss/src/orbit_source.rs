@@ -217,19 +217,28 @@ pub struct PreciseSource<'a> {
 
 impl OrbitSource for PreciseSource<'_> {
     fn select(&self, sat: SatId, t: GpsTime) -> Option<SelectedOrbit<'_>> {
-        let e = EphemerisStore::select(self.broadcast, sat, t)?;
-        let p = self.products;
-        let covered = |t: GpsTime| p.state(sat, t).is_some_and(|s| s.clock_bias_s.is_some());
-        if !(covered(t.add_s(-PRECISE_LIGHT_TIME_MARGIN_S)) && covered(t)) {
-            return None;
-        }
-        Some(SelectedOrbit {
-            orbit: OrbitRef::Precise(p, sat),
-            record: RecordRef::Any(e),
-            accuracy: OrbitAccuracy::Sigma(PRECISE_SIGMA_M),
-            iod: e.iod(),
-        })
+        precise_select(self.products, self.broadcast, sat, t)
     }
+}
+
+/// `PreciseSource::select` on borrowed products and records.
+fn precise_select<'a>(
+    p: &'a PreciseProducts,
+    broadcast: &'a EphemerisStore,
+    sat: SatId,
+    t: GpsTime,
+) -> Option<SelectedOrbit<'a>> {
+    let e = EphemerisStore::select(broadcast, sat, t)?;
+    let covered = |t: GpsTime| p.state(sat, t).is_some_and(|s| s.clock_bias_s.is_some());
+    if !(covered(t.add_s(-PRECISE_LIGHT_TIME_MARGIN_S)) && covered(t)) {
+        return None;
+    }
+    Some(SelectedOrbit {
+        orbit: OrbitRef::Precise(p, sat),
+        record: RecordRef::Any(e),
+        accuracy: OrbitAccuracy::Sigma(PRECISE_SIGMA_M),
+        iod: e.iod(),
+    })
 }
 
 /// What a broadcast record states of its accuracy: URA (GPS, QZSS, BeiDou), SISA
@@ -256,4 +265,36 @@ pub fn ura_variance_m2(sv_accuracy_m: f64) -> f64 {
         URA_BOUNDS_M[14]
     };
     bound * bound
+}
+
+/// Owned orbits for a run: every system's broadcast records, or precise products
+/// with them ([`PreciseSource`]).
+#[derive(Clone, Debug)]
+pub enum RunOrbits {
+    Broadcast(EphemerisStore),
+    Precise {
+        products: PreciseProducts,
+        broadcast: EphemerisStore,
+    },
+}
+
+impl RunOrbits {
+    /// The broadcast records (health, group delays, GLONASS channels).
+    pub fn broadcast(&self) -> &EphemerisStore {
+        match self {
+            RunOrbits::Broadcast(b) | RunOrbits::Precise { broadcast: b, .. } => b,
+        }
+    }
+}
+
+impl OrbitSource for RunOrbits {
+    fn select(&self, sat: SatId, t: GpsTime) -> Option<SelectedOrbit<'_>> {
+        match self {
+            RunOrbits::Broadcast(b) => OrbitSource::select(b, sat, t),
+            RunOrbits::Precise {
+                products,
+                broadcast,
+            } => precise_select(products, broadcast, sat, t),
+        }
+    }
 }

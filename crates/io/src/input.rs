@@ -194,6 +194,25 @@ pub struct RinexGnss {
     pub fde: bool,
     /// DGPS corrections; None = uncorrected pseudoranges with the broadcast models.
     pub dgps: Option<DgpsSource>,
+    /// Code preferences per system (`gnss.signals`; empty: the documented defaults).
+    pub signals: Vec<(navfuse_gnss::System, Vec<navfuse_gnss::ObsCode>)>,
+    /// Ionosphere-free code where a satellite has two bands (`gnss.dual_frequency`).
+    pub dual_frequency: bool,
+    /// Where the orbits and clocks come from (`gnss.orbits`).
+    pub orbits: Orbits,
+}
+
+/// `gnss.orbits`: broadcast ephemerides (the navigation file) or precise products.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub enum Orbits {
+    #[default]
+    Broadcast,
+    /// SP3 orbit files and RINEX clock files (none: the SP3 clocks); the navigation
+    /// file still gives health and group delays.
+    Sp3 {
+        sp3: Vec<PathBuf>,
+        clk: Vec<PathBuf>,
+    },
 }
 
 /// Where DGPS pseudorange corrections come from.

@@ -20,16 +20,19 @@ use crate::ephemeris::SPEED_OF_LIGHT_MPS;
 use crate::ephemeris_set::EphemerisSet;
 use crate::geometry::{az_el, signal_path};
 use crate::obs::{ObsEpoch, SatObs};
-use crate::orbit_source::OrbitAccuracy;
+use crate::orbit_source::OrbitSource;
+use crate::signal::ObsCode;
+use crate::signal_plan::ChosenSignal;
 use crate::spp::{
-    solve_epoch, SppConfig, SppError, SppErrorModel, SppMeasurement, SppSolution,
+    solve_epoch, SppConfig, SppError, SppErrorModel, SppMeasurement, SppSolution, GPS_L1_HZ,
     GPS_L1_WAVELENGTH_M,
 };
 use crate::time::{GpsTime, SECONDS_PER_WEEK};
 use nalgebra::Vector3;
 use navfuse_core::earth::{c_ne, ecef_to_lla};
-use navfuse_core::sat::System;
+use navfuse_core::sat::{SatId, System};
 use navfuse_core::{GnssFix, GnssRawEpoch, SatMeasurement};
+use std::collections::BTreeMap;
 
 #[cfg(test)]
 pub(crate) mod tests;
@@ -82,7 +85,7 @@ pub struct PreparedEpoch {
     pub dgps_missing: usize,
 }
 
-/// Per-PRN state carried from the previous epoch.
+/// Per-satellite state carried from the previous epoch.
 #[derive(Clone, Copy, Debug)]
 struct PrnState {
     /// Index of the epoch it belongs to.
@@ -123,27 +126,47 @@ impl RxEstimate {
 }
 
 /// Prepares successive receiver epochs; keeps the last receiver estimate and the
-/// per-PRN carrier continuity and DGPS state.
+/// per-satellite carrier continuity and DGPS state. `O` gives the orbits: GPS
+/// broadcast records ([`EphemerisSet`], the default), every system's
+/// (`EphemerisStore`), or precise products (`PreciseSource`).
 #[derive(Clone, Debug)]
-pub struct EpochPreparer {
-    ephs: EphemerisSet,
+pub struct EpochPreparer<O: OrbitSource = EphemerisSet> {
+    ephs: O,
     cfg: TightPrepConfig,
     dgps: Option<DgpsCorrections>,
-    /// Index = PRN.
-    prns: Vec<Option<PrnState>>,
+    sats: BTreeMap<SatId, PrnState>,
     last: Option<RxEstimate>,
     /// Smoothed position for the atmosphere models: (tag [s], ECEF [m], velocity).
     model_pos: Option<(f64, Vector3<f64>, Option<Vector3<f64>>)>,
     epoch: u64,
 }
 
-impl EpochPreparer {
-    pub fn new(ephs: EphemerisSet, cfg: TightPrepConfig, dgps: Option<DgpsCorrections>) -> Self {
+/// The GPS L1 C/A observations of a satellite as a chosen signal (C1C, L1C, D1C,
+/// S1C); None without any of code, carrier and Doppler.
+fn gps_l1(s: &SatObs) -> Option<ChosenSignal> {
+    Some(ChosenSignal {
+        sat: SatId::gps(s.prn),
+        code: ObsCode(*b"C1C"),
+        pseudorange_m: s.pseudorange_m.unwrap_or(f64::NAN),
+        iono_free_with: None,
+        frequency_hz: GPS_L1_HZ,
+        carrier_cycles: s.carrier_cycles,
+        lli: s.lli,
+        doppler_hz: s.doppler_hz,
+        cn0_dbhz: s.cn0_dbhz,
+    })
+    .filter(|_| s.pseudorange_m.is_some() || s.carrier_cycles.is_some() || s.doppler_hz.is_some())
+}
+
+impl<O: OrbitSource> EpochPreparer<O> {
+    /// `dgps`: corrections of GPS satellites (RTCM 2 types 1/9 and the simulator's
+    /// are GPS-only); other systems' pseudoranges keep the broadcast models.
+    pub fn new(ephs: O, cfg: TightPrepConfig, dgps: Option<DgpsCorrections>) -> Self {
         EpochPreparer {
             ephs,
             cfg,
             dgps,
-            prns: vec![None; 256],
+            sats: BTreeMap::new(),
             last: None,
             model_pos: None,
             epoch: 0,
@@ -160,9 +183,22 @@ impl EpochPreparer {
     /// a rollover). They are times of validity: the receiver tag minus the estimated
     /// receiver clock.
     pub fn prepare(&mut self, epoch: &ObsEpoch, week: i32) -> PreparedEpoch {
+        let sats: Vec<ChosenSignal> = epoch.sats.iter().filter_map(gps_l1).collect();
+        self.prepare_signals(epoch.t, epoch.flag, &sats, week)
+    }
+
+    /// Prepare one epoch of chosen signals of any system (`SignalPlan::choose`;
+    /// receiver tag `t`, RINEX epoch flag `flag`); as [`EpochPreparer::prepare`].
+    pub fn prepare_signals(
+        &mut self,
+        t: GpsTime,
+        flag: u8,
+        sats: &[ChosenSignal],
+        week: i32,
+    ) -> PreparedEpoch {
         let c = SPEED_OF_LIGHT_MPS;
         self.epoch += 1;
-        let t_tag_s = epoch.t.seconds_of_week(week);
+        let t_tag_s = t.seconds_of_week(week);
         let predicted = self.last.map(|l| l.predict(t_tag_s));
 
         // DGPS corrections of this epoch: tags and correction times lie on the same
@@ -170,35 +206,34 @@ impl EpochPreparer {
         // up to 1 ms after the later of tag and true time belongs to this epoch.
         let t_est_s = t_tag_s - predicted.map_or(0.0, |p| p.clock_m) / c;
         let t_query_s = t_tag_s.max(t_est_s) + DGPS_SAME_EPOCH_S;
-        let corrs: Vec<Option<DgpsCorrection>> = epoch
-            .sats
+        let corrs: Vec<Option<DgpsCorrection>> = sats
             .iter()
-            .map(|s| self.dgps_for(s.prn, epoch.t, t_query_s))
+            .map(|s| self.dgps_for(s.sat, t, t_query_s))
             .collect();
 
         // SPP measurements; with DGPS the model difference to the station at
         // `approx` (none without a position: the rover is taken at the station).
         let measurements = |approx: Option<Vector3<f64>>| -> Vec<SppMeasurement> {
-            let model_diff = |prn| self.model_difference_m(prn, epoch.t, approx);
-            epoch
-                .sats
-                .iter()
+            let model_diff = |sat| self.model_difference_m(sat, t, approx);
+            sats.iter()
                 .zip(&corrs)
-                .filter_map(|(s, corr)| {
-                    // range rate -lambda D + rrc: the DGPS rate enters the velocity
-                    let doppler_hz = s
-                        .doppler_hz
-                        .map(|d| d - corr.map_or(0.0, |k| k.rrc_mps) / GPS_L1_WAVELENGTH_M);
-                    Some(SppMeasurement {
-                        dgps_prc_m: corr.map(|k| k.at_m(t_est_s) - model_diff(s.prn)),
-                        ..SppMeasurement::gps_l1(s.prn, s.pseudorange_m?, doppler_hz)
-                    })
+                .filter(|(s, _)| s.pseudorange_m.is_finite())
+                .map(|(s, corr)| {
+                    let m = SppMeasurement::from(s);
+                    SppMeasurement {
+                        // range rate -lambda D + rrc: the DGPS rate enters the velocity
+                        doppler_hz: s
+                            .doppler_hz
+                            .map(|d| d - corr.map_or(0.0, |k| k.rrc_mps) / m.wavelength_m()),
+                        dgps_prc_m: corr.map(|k| k.at_m(t_est_s) - model_diff(s.sat)),
+                        ..m
+                    }
                 })
                 .collect()
         };
         let start = predicted.map(|p| (p.pos_ecef_m, p.clock_m));
         let mut meas = measurements(predicted.map(|p| p.pos_ecef_m));
-        let mut spp = solve_epoch(&self.ephs, epoch.t, &meas, &self.cfg.spp, start);
+        let mut spp = solve_epoch(&self.ephs, t, &meas, &self.cfg.spp, start);
         let station_known = self
             .dgps
             .as_ref()
@@ -207,7 +242,7 @@ impl EpochPreparer {
         if let (None, true, Ok(first)) = (predicted, station_known, &spp) {
             // First fix with a located station: redo with the model difference there.
             meas = measurements(Some(first.pos_ecef_m));
-            spp = solve_epoch(&self.ephs, epoch.t, &meas, &self.cfg.spp, start);
+            spp = solve_epoch(&self.ephs, t, &meas, &self.cfg.spp, start);
         }
         // A failed residual test still locates the receiver well enough for the
         // geometry (100 m moves a satellite by ~1 mm): refit without FDE, no fix.
@@ -217,7 +252,7 @@ impl EpochPreparer {
                     fde: false,
                     ..self.cfg.spp.clone()
                 };
-                solve_epoch(&self.ephs, epoch.t, &meas, &cfg, start).ok()
+                solve_epoch(&self.ephs, t, &meas, &cfg, start).ok()
             }
             r => r.as_ref().ok().cloned(),
         };
@@ -252,13 +287,15 @@ impl EpochPreparer {
         let t_s = t_tag_s - rx.clock_m / c;
         let model_pos = self.smoothed_position(&rx);
         let fix = spp.as_ref().ok().map(|s| fix_from_spp(s, t_s));
-        let mut sats: Vec<SatMeasurement> = Vec::with_capacity(epoch.sats.len());
+        let mut prepared: Vec<SatMeasurement> = Vec::with_capacity(sats.len());
+        let mut seen: Vec<SatId> = Vec::with_capacity(sats.len());
         let (mut dgps_applied, mut dgps_missing) = (0, 0);
-        for (s, corr) in epoch.sats.iter().zip(&corrs) {
-            if sats.iter().any(|m| m.prn == s.prn) {
+        for (s, corr) in sats.iter().zip(&corrs) {
+            if seen.contains(&s.sat) {
                 continue;
             }
-            let Some(m) = self.prepare_sat(epoch, s, *corr, &rx, &model_pos, t_s) else {
+            seen.push(s.sat);
+            let Some(m) = self.prepare_sat(t, flag, s, *corr, &rx, &model_pos, t_s) else {
                 continue;
             };
             if m.pseudorange_m.is_some() {
@@ -268,24 +305,32 @@ impl EpochPreparer {
                     dgps_missing += 1;
                 }
             }
-            sats.push(m);
+            prepared.push(m);
         }
         PreparedEpoch {
-            raw: GnssRawEpoch { t: t_s, sats, fix },
+            raw: GnssRawEpoch {
+                t: t_s,
+                sats: prepared,
+                fix,
+            },
             spp,
             dgps_applied,
             dgps_missing,
         }
     }
 
-    /// The DGPS correction for `prn` at `t_s` (s of the run's week), with the
-    /// ephemeris' IODE, moved onto the run's time scale; None without DGPS.
-    fn dgps_for(&self, prn: u8, t: GpsTime, t_s: f64) -> Option<DgpsCorrection> {
+    /// The DGPS correction for GPS satellite `sat` at `t_s` (s of the run's week),
+    /// with the ephemeris' IODE, moved onto the run's time scale; None without DGPS
+    /// or for another system.
+    fn dgps_for(&self, sat: SatId, t: GpsTime, t_s: f64) -> Option<DgpsCorrection> {
         let store = self.dgps.as_ref()?;
-        let eph = self.ephs.select(prn, t)?;
+        if sat.system != System::Gps {
+            return None;
+        }
+        let iode = self.ephs.select(sat, t)?.iod;
         // The store's scale may start a week off the run's (rollover between them).
         let shift = ((store.first_t_s()? - t_s) / SECONDS_PER_WEEK).round() * SECONDS_PER_WEEK;
-        let mut k = *store.lookup(prn, t_s + shift, self.cfg.dgps_max_age_s, Some(eph.iode))?;
+        let mut k = *store.lookup(sat.prn, t_s + shift, self.cfg.dgps_max_age_s, Some(iode))?;
         k.t_s -= shift;
         Some(k)
     }
@@ -326,13 +371,18 @@ impl EpochPreparer {
         self.cfg.spp.atmosphere_m(&lla, az, el, sow)
     }
 
-    /// Models at `rx_pos_ecef_m` minus at the DGPS station for `prn` at `t` (no light
+    /// Models at `rx_pos_ecef_m` minus at the DGPS station for `sat` at `t` (no light
     /// time: the elevation only), 0 when either position is unknown [m].
-    fn model_difference_m(&self, prn: u8, t: GpsTime, rx_pos_ecef_m: Option<Vector3<f64>>) -> f64 {
-        let (Some(rx), Some(eph)) = (rx_pos_ecef_m, self.ephs.select(prn, t)) else {
+    fn model_difference_m(
+        &self,
+        sat: SatId,
+        t: GpsTime,
+        rx_pos_ecef_m: Option<Vector3<f64>>,
+    ) -> f64 {
+        let (Some(rx), Some(eph)) = (rx_pos_ecef_m, self.ephs.select(sat, t)) else {
             return 0.0;
         };
-        let sat = eph.sat_state(t).pos_ecef_m;
+        let sat = crate::geometry::SatOrbit::sat_state(&eph, t).pos_ecef_m;
         let Some((iono_s, tropo_s)) = self.station_models_m(&sat, t.sow) else {
             return 0.0;
         };
@@ -347,21 +397,27 @@ impl EpochPreparer {
     }
 
     /// One satellite; None without an ephemeris or usable observable, or below the
-    /// mask. Updates the PRN's continuity state.
+    /// mask. Updates the satellite's continuity state.
+    #[allow(clippy::too_many_arguments)]
     fn prepare_sat(
         &mut self,
-        epoch: &ObsEpoch,
-        s: &SatObs,
+        t: GpsTime,
+        flag: u8,
+        s: &ChosenSignal,
         corr: Option<DgpsCorrection>,
         rx: &RxEstimate,
         model_pos_ecef_m: &Vector3<f64>,
         t_s: f64,
     ) -> Option<SatMeasurement> {
         let c = SPEED_OF_LIGHT_MPS;
-        let lambda = GPS_L1_WAVELENGTH_M;
+        let lambda = c / s.frequency_hz;
         let cfg = &self.cfg.spp;
-        let eph = self.ephs.select(s.prn, epoch.t)?;
-        let pr = s.pseudorange_m.filter(|p| p.is_finite() && *p > 0.0);
+        let orbit = self.ephs.select(s.sat, t)?;
+        let group_delay_s =
+            orbit
+                .record
+                .group_delay_s(s.sat.system, s.code.band(), s.iono_free_with)?;
+        let pr = Some(s.pseudorange_m).filter(|p| p.is_finite() && *p > 0.0);
         let doppler = s.doppler_hz.filter(|d| d.is_finite());
         let cycles = s.carrier_cycles.filter(|l| l.is_finite());
         if pr.is_none() && doppler.is_none() && cycles.is_none() {
@@ -370,35 +426,47 @@ impl EpochPreparer {
         let lla = ecef_to_lla(&rx.pos_ecef_m);
         let vel = rx.vel_ecef_mps.unwrap_or_default();
         // Light time at the true reception time (tag - clock), as spp.rs.
-        let t_true = epoch.t.add_s(-rx.clock_m / c);
-        let sp = signal_path(eph, &rx.pos_ecef_m, &vel, t_true);
+        let t_true = t.add_s(-rx.clock_m / c);
+        let sp = signal_path(&orbit, &rx.pos_ecef_m, &vel, t_true);
         let (_, el) = az_el(&lla, &sp.los_unit);
         if el.is_nan() || el < cfg.elevation_mask_rad {
             return None;
         }
-        // IS-GPS-200 20.3.3.3.3.2: the L1 C/A user's satellite clock is dt_sv - TGD.
-        let sat_clock_m = c * (sp.sat_clock_bias_s - eph.tgd_s);
+        // IS-GPS-200 20.3.3.3.3.2: the single-frequency user's satellite clock is
+        // dt_sv - TGD (each system's group delay of the code, `band_group_delay_s`).
+        let sat_clock_m = c * (sp.sat_clock_bias_s - group_delay_s);
         // Broadcast models at the rover and at the DGPS station (taken equal when its
-        // position is unknown: then the rover is assumed near it).
-        let (iono_m, tropo_m) = self.models_at_m(model_pos_ecef_m, &sp.sat_pos_ecef_m, epoch.t.sow);
+        // position is unknown: then the rover is assumed near it); the L1 Klobuchar
+        // delay scaled to the signal, (f_L1 / f)^2.
+        let iono_scale = (GPS_L1_HZ / s.frequency_hz).powi(2);
+        let scaled = |(i, tr): (f64, f64)| (i * iono_scale, tr);
+        let (iono_m, tropo_m) =
+            scaled(self.models_at_m(model_pos_ecef_m, &sp.sat_pos_ecef_m, t.sow));
         let (iono_s_m, tropo_s_m) = self
-            .station_models_m(&sp.sat_pos_ecef_m, epoch.t.sow)
+            .station_models_m(&sp.sat_pos_ecef_m, t.sow)
+            .map(scaled)
             .unwrap_or((iono_m, tropo_m));
+        // An ionosphere-free code has no ionospheric delay left.
+        let code_iono_m = if s.iono_free_with.is_some() {
+            0.0
+        } else {
+            iono_m
+        };
         // Code: the correction holds the station's delays, models included.
         let pseudorange_m = pr.map(|p| {
             p + sat_clock_m
                 + match corr {
                     Some(k) => k.at_m(t_s) - (iono_m + tropo_m - iono_s_m - tropo_s_m),
-                    None => -iono_m - tropo_m,
+                    None => -code_iono_m - tropo_m,
                 }
         });
         let pr_var = cfg.pseudorange_variance_m2(
-            System::Gps,
-            &OrbitAccuracy::Ura(eph.sv_accuracy_m),
+            s.sat.system,
+            &orbit.accuracy,
             el,
-            iono_m,
+            code_iono_m,
             corr.is_some(),
-            false,
+            s.iono_free_with.is_some(),
         );
         let em = &cfg.errors;
         let el_scale = (em.elevation_variance_m2(el)
@@ -409,10 +477,14 @@ impl EpochPreparer {
             doppler.map(|d| -lambda * d + c * sp.sat_clock_drift_s_per_s + rrc_mps.unwrap_or(0.0));
 
         // Carrier continuity: lock kept (LLI bit 0, RINEX 3.04 §5.3), epoch flag 0
-        // (1 = power failure), and this PRN prepared with a carrier at the previous epoch.
-        let slot = self.prns.get_mut(usize::from(s.prn))?;
-        let prev = slot.filter(|p| p.epoch + 1 == self.epoch && p.has_carrier);
-        let lost_lock = epoch.flag != 0 || s.lli & 1 != 0 || prev.is_none();
+        // (1 = power failure), and this satellite prepared with a carrier at the
+        // previous epoch.
+        let prev = self
+            .sats
+            .get(&s.sat)
+            .copied()
+            .filter(|p| p.epoch + 1 == self.epoch && p.has_carrier);
+        let lost_lock = flag != 0 || s.lli & 1 != 0 || prev.is_none();
         // Carrier: the rover's models with the phase sign (-I + T) are removed (a
         // climbing UAV's troposphere changes by cm/s). With DGPS the integrated rrc
         // (trapezoids) is added, and the change of the station's models (I + T),
@@ -429,16 +501,19 @@ impl EpochPreparer {
             },
             _ => 0.0,
         };
-        *slot = Some(PrnState {
-            epoch: self.epoch,
-            t_s,
-            has_carrier: cycles.is_some(),
-            rrc_mps,
-            station_model_m,
-            acc_m,
-        });
+        self.sats.insert(
+            s.sat,
+            PrnState {
+                epoch: self.epoch,
+                t_s,
+                has_carrier: cycles.is_some(),
+                rrc_mps,
+                station_model_m,
+                acc_m,
+            },
+        );
         Some(SatMeasurement {
-            prn: s.prn,
+            prn: s.sat.prn,
             sat_pos_ecef_m: sp.sat_pos_ecef_m,
             sat_vel_ecef_mps: sp.sat_vel_ecef_mps,
             elevation_rad: el,

@@ -54,6 +54,16 @@ pub(super) struct TGnss {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) fde: Option<bool>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) signals: Option<std::collections::BTreeMap<String, Vec<String>>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) dual_frequency: Option<bool>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) orbits: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) sp3: Option<Vec<String>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) clk: Option<Vec<String>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) dgps: Option<bool>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) dgps_corrections: Option<String>,
@@ -116,6 +126,11 @@ impl TGnss {
             range_rate: None,
             elevation_mask_deg: None,
             fde: None,
+            signals: None,
+            dual_frequency: None,
+            orbits: None,
+            sp3: None,
+            clk: None,
             dgps: None,
             dgps_corrections: None,
             dgps_reference_obs: None,

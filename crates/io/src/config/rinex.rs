@@ -1,6 +1,7 @@
 //! The RINEX keys of `[gnss]` (`gnss.format = "rinex"`): navigation file, coupling,
-//! range rate, elevation mask, fault exclusion, DGPS (input::RinexGnss), and the
-//! `[gnss.tight]` table (tight.rs).
+//! range rate, elevation mask, fault exclusion, signals, dual frequency, orbits (SP3
+//! and clock files), DGPS (input::RinexGnss), and the `[gnss.tight]` table
+//! (tight.rs).
 
 use std::path::Path;
 
@@ -12,7 +13,7 @@ use super::paths::{file_key, PathWriter};
 use super::tight;
 use super::units::{DEG, SAME};
 use super::validate::{opt_or, positive, v3};
-use crate::input::{Coupling, DgpsKind, DgpsSource, RinexGnss};
+use crate::input::{Coupling, DgpsKind, DgpsSource, Orbits, RinexGnss};
 
 /// Default `gnss.elevation_mask_deg`.
 pub const DEFAULT_ELEVATION_MASK_DEG: f64 = 10.0;
@@ -82,6 +83,54 @@ pub(super) fn convert(g: &TGnss, base: &Path) -> KResult<(RinexGnss, TightOption
             )),
         }
         .map(|kind| DgpsSource { kind, max_age_s });
+    let signals = match &g.signals {
+        None => Vec::new(),
+        Some(m) => {
+            let text: Vec<String> = m
+                .iter()
+                .map(|(sys, codes)| format!("{sys}:{}", codes.join("+")))
+                .collect();
+            navfuse_gnss::signal_plan::parse_codes(&text.join(",")).map_err(|e| {
+                kerr(
+                    "gnss.signals",
+                    format!("{e} (e.g. signals = {{ R = [\"C1P\", \"C1C\"] }})"),
+                )
+            })?
+        }
+    };
+    let paths = |key: &str, v: &Option<Vec<String>>| -> KResult<Vec<std::path::PathBuf>> {
+        v.iter().flatten().map(|f| file_key(base, key, f)).collect()
+    };
+    let orbits = match g.orbits.as_deref().unwrap_or("broadcast") {
+        "broadcast" => {
+            if g.sp3.is_some() || g.clk.is_some() {
+                return Err(kerr(
+                    "gnss.sp3",
+                    "sp3 / clk files are given but orbits = \"broadcast\": set orbits = \"sp3\"",
+                ));
+            }
+            Orbits::Broadcast
+        }
+        "sp3" => {
+            let sp3 = paths("gnss.sp3", &g.sp3)?;
+            if sp3.is_empty() {
+                return Err(kerr(
+                    "gnss.sp3",
+                    "orbits = \"sp3\" needs sp3 = [\"FILE.sp3\", ...]",
+                ));
+            }
+            Orbits::Sp3 {
+                sp3,
+                clk: paths("gnss.clk", &g.clk)?,
+            }
+        }
+        other => {
+            return Err(kerr(
+                "gnss.orbits",
+                format!("expected \"broadcast\" or \"sp3\", got \"{other}\""),
+            ))
+        }
+    };
     let mut t = TightOptions {
         enabled: coupling == Coupling::Tight,
         range_rate: g.range_rate.unwrap_or(TightOptions::default().range_rate),
@@ -97,6 +146,9 @@ pub(super) fn convert(g: &TGnss, base: &Path) -> KResult<(RinexGnss, TightOption
             elevation_mask_deg,
             fde: g.fde.unwrap_or(true),
             dgps,
+            signals,
+            dual_frequency: g.dual_frequency.unwrap_or(false),
+            orbits,
         },
         t,
     ))
@@ -109,6 +161,30 @@ pub(super) fn to_toml(r: &RinexGnss, tight: &TightOptions, t: &mut TGnss, w: &Pa
     t.range_rate = Some(tight.range_rate);
     t.elevation_mask_deg = Some(r.elevation_mask_deg);
     t.fde = Some(r.fde);
+    if !r.signals.is_empty() {
+        t.signals = Some(
+            r.signals
+                .iter()
+                .map(|(s, c)| {
+                    (
+                        s.letter().to_string(),
+                        c.iter().map(|x| x.to_string()).collect(),
+                    )
+                })
+                .collect(),
+        );
+    }
+    t.dual_frequency = Some(r.dual_frequency);
+    match &r.orbits {
+        Orbits::Broadcast => t.orbits = Some("broadcast".into()),
+        Orbits::Sp3 { sp3, clk } => {
+            t.orbits = Some("sp3".into());
+            t.sp3 = Some(sp3.iter().map(|p| w.path(p)).collect());
+            if !clk.is_empty() {
+                t.clk = Some(clk.iter().map(|p| w.path(p)).collect());
+            }
+        }
+    }
     t.dgps = Some(r.dgps.is_some());
     if let Some(d) = &r.dgps {
         t.dgps_max_age_s = Some(d.max_age_s);
