@@ -254,7 +254,7 @@ impl EpochPreparer {
         let mut sats: Vec<SatMeasurement> = Vec::with_capacity(epoch.sats.len());
         let (mut dgps_applied, mut dgps_missing) = (0, 0);
         for (s, corr) in epoch.sats.iter().zip(&corrs) {
-            if sats.iter().any(|m| m.prn == s.prn) {
+            if sats.iter().any(|m| m.sat.prn == s.prn) {
                 continue;
             }
             let Some(m) = self.prepare_sat(epoch, s, *corr, &rx, &model_pos, t_s) else {
@@ -430,7 +430,7 @@ impl EpochPreparer {
             acc_m,
         });
         Some(SatMeasurement {
-            prn: s.prn,
+            sat: crate::SatId::gps(s.prn),
             sat_pos_ecef_m: sp.sat_pos_ecef_m,
             sat_vel_ecef_mps: sp.sat_vel_ecef_mps,
             elevation_rad: el,
