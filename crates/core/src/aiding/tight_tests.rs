@@ -81,9 +81,10 @@ fn antenna_ecef(c: &NavConfig) -> Vector3<f64> {
     lla_to_ecef(&lla_add_ned(&lla, &l_n))
 }
 
-/// One epoch a second: every satellite of `SKY` up to `CONVERGED_T`, then only
-/// the blockage's. Pseudoranges carry the clock, the ISB (Galileo) and noise.
-fn epochs(c: &NavConfig) -> Vec<Measurement> {
+/// One epoch a second: every satellite of `SKY` up to `CONVERGED_T` (GPS from
+/// `gps_from` on), then only the blockage's. Pseudoranges carry the clock, the ISB
+/// (Galileo) and noise.
+fn epochs(c: &NavConfig, gps_from: f64) -> Vec<Measurement> {
     let mut rng = rand_pcg::Pcg64::seed_from_u64(5);
     let n = Normal::new(0.0, 1.0).unwrap();
     let lla = c.initial.lla.unwrap();
@@ -94,7 +95,7 @@ fn epochs(c: &NavConfig) -> Vec<Measurement> {
         let t = k as f64;
         let mut sats = Vec::new();
         for &(system, prn, az, el, kept) in &SKY {
-            if t > CONVERGED_T && !kept {
+            if (t > CONVERGED_T && !kept) || (system == System::Gps && t < gps_from) {
                 continue;
             }
             let (az, el) = (az.to_radians(), el.to_radians());
@@ -133,24 +134,28 @@ fn epochs(c: &NavConfig) -> Vec<Measurement> {
 }
 
 /// What a run gives: the Galileo ISB estimate and its 1-sigma at `CONVERGED_T`
-/// (None without the state), the largest horizontal and 3-D position errors up to
-/// then (from 60 s on) and over the blockage \[m\], and the summary.
+/// (None without the state), the largest position error up to then (from 60 s on),
+/// the error then, the largest horizontal and 3-D errors over the blockage \[m\], and
+/// the summary.
 struct Outcome {
     isb: Option<(f64, f64)>,
     converged_err_m: f64,
+    /// The position error at `CONVERGED_T` \[m\].
+    final_err_m: f64,
     blockage_h_m: f64,
     blockage_3d_m: f64,
     summary: RunSummary,
 }
 
-fn navigate(systems: &[System]) -> Outcome {
+fn navigate(systems: &[System], gps_from: f64) -> Outcome {
     let c = config(systems);
     let truth = c.initial.lla.unwrap();
-    let (mut isb, mut converged_err_m, mut blockage_h_m, mut blockage_3d_m) = (None, 0.0, 0.0, 0.0);
+    let (mut isb, mut converged_err_m, mut final_err_m) = (None, 0.0, 0.0);
+    let (mut blockage_h_m, mut blockage_3d_m) = (0.0, 0.0);
     let summary = run::<NavError>(
         &c,
         imu(&c).into_iter().map(Ok),
-        &epochs(&c),
+        &epochs(&c, gps_from),
         None,
         |n| {
             let t = n.nav().t;
@@ -163,6 +168,7 @@ fn navigate(systems: &[System]) -> Outcome {
                 blockage_3d_m = f64::max(blockage_3d_m, e.norm());
             }
             if isb.is_none() && t >= CONVERGED_T {
+                final_err_m = e.norm();
                 let block = isb_block(System::Galileo).unwrap();
                 isb = Some(n.layout().index(block).map(|i| {
                     let names = extra_names(n.layout());
@@ -179,10 +185,20 @@ fn navigate(systems: &[System]) -> Outcome {
     Outcome {
         isb: isb.flatten(),
         converged_err_m,
+        final_err_m,
         blockage_h_m,
         blockage_3d_m,
         summary,
     }
+}
+
+/// The run's `IsbSet` events.
+fn isb_events(summary: &RunSummary) -> Vec<&Event> {
+    summary
+        .events
+        .iter()
+        .filter(|e| matches!(e, Event::IsbSet { .. }))
+        .collect()
 }
 
 /// GPS + Galileo with a +7 m inter-system bias: the bias is set from the first
@@ -190,7 +206,7 @@ fn navigate(systems: &[System]) -> Outcome {
 /// and the bias shows in the summary's source states.
 #[test]
 fn inter_system_bias_converges_to_the_truth() {
-    let o = navigate(&[System::Gps, System::Galileo]);
+    let o = navigate(&[System::Gps, System::Galileo], 0.0);
     let (isb, sd) = o.isb.expect("Galileo ISB state");
     eprintln!(
         "ISB_E at {CONVERGED_T} s: {isb:.3} m (sigma {sd:.3} m, truth {ISB_E_M}); largest position error 60-{CONVERGED_T} s: {:.3} m",
@@ -198,12 +214,7 @@ fn inter_system_bias_converges_to_the_truth() {
     );
     assert!((isb - ISB_E_M).abs() < 0.3 && sd < 0.3, "{isb} {sd}");
     assert!(o.converged_err_m < 1.0, "{}", o.converged_err_m);
-    let set: Vec<&Event> = o
-        .summary
-        .events
-        .iter()
-        .filter(|e| matches!(e, Event::IsbSet { .. }))
-        .collect();
+    let set = isb_events(&o.summary);
     assert_eq!(set.len(), 1, "{set:?}");
     let Event::IsbSet {
         system,
@@ -231,8 +242,8 @@ fn inter_system_bias_converges_to_the_truth() {
 /// Galileo ignored (1 GPS satellite) drifts much further.
 #[test]
 fn one_gps_two_galileo_hold_the_position_with_the_isb() {
-    let multi = navigate(&[System::Gps, System::Galileo]);
-    let gps = navigate(&[System::Gps]);
+    let multi = navigate(&[System::Gps, System::Galileo], 0.0);
+    let gps = navigate(&[System::Gps], 0.0);
     eprintln!(
         "blockage 1 G + 2 E, largest error over {} s: {:.3} m horizontal, {:.3} m 3-D; GPS only (1 G): {:.3} m horizontal, {:.3} m 3-D",
         END_T - CONVERGED_T,
@@ -250,4 +261,26 @@ fn one_gps_two_galileo_hold_the_position_with_the_isb() {
         multi.blockage_3d_m,
         gps.blockage_3d_m
     );
+}
+
+/// No GPS satellite for the first 60 s: Galileo stands in for GPS (the clock bias
+/// takes its clock, its ISB starts at 0); once GPS comes the filter moves the 7 m
+/// into the ISB, the position back at the truth.
+#[test]
+fn galileo_stands_in_until_gps_comes() {
+    let o = navigate(&[System::Gps, System::Galileo], 60.0);
+    let (isb, sd) = o.isb.expect("Galileo ISB state");
+    eprintln!(
+        "Galileo alone for 60 s: ISB_E at {CONVERGED_T} s {isb:.3} m (sigma {sd:.3} m); position error 60-{CONVERGED_T} s at most {:.3} m, {:.3} m at the end",
+        o.converged_err_m, o.final_err_m
+    );
+    let set = isb_events(&o.summary);
+    assert!(
+        matches!(set[..], [Event::IsbSet { isb_m, sats: 4, .. }] if *isb_m == 0.0),
+        "{set:?}"
+    );
+    assert!((isb - ISB_E_M).abs() < 0.5, "{isb} {sd}");
+    // GPS's arrival moves the solution while the 7 m find their place.
+    assert!(o.converged_err_m < 3.0, "{}", o.converged_err_m);
+    assert!(o.final_err_m < 1.0, "{}", o.final_err_m);
 }
