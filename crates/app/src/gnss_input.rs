@@ -48,9 +48,13 @@ pub fn prep_config(r: &RinexGnss, iono: IonoModel) -> TightPrepConfig {
 }
 
 /// Read the observations, navigation data (or precise products) and DGPS source of
-/// a RINEX input and prepare every epoch of the systems `systems`.
-pub fn load_rinex(src: &GnssSource, r: &RinexGnss) -> Result<RinexInput, Error> {
-    let systems = vec![System::Gps];
+/// a RINEX input and prepare every epoch of the systems `systems` (`[gnss] systems`).
+pub fn load_rinex(
+    src: &GnssSource,
+    r: &RinexGnss,
+    systems: &[System],
+) -> Result<RinexInput, Error> {
+    let systems = systems.to_vec();
     let nav = read_rinex_nav(&r.nav_path)?;
     let broadcast = nav.store();
     let counts = broadcast.counts();
@@ -65,6 +69,7 @@ pub fn load_rinex(src: &GnssSource, r: &RinexGnss) -> Result<RinexInput, Error> 
                 .join(", ")
         )));
     }
+    let mut warnings: Vec<String> = Vec::new();
     let iono = IonoModel::from_broadcast(nav.iono_alpha, nav.iono_beta);
     // DGPS corrections from a reference station are computed for GPS.
     let gps_ephs = EphemerisSet::new(nav.gps);
@@ -75,13 +80,22 @@ pub fn load_rinex(src: &GnssSource, r: &RinexGnss) -> Result<RinexInput, Error> 
             broadcast,
         },
     };
+    for sys in &systems {
+        if !counts.contains_key(sys) {
+            warnings.push(format!(
+                "{}: no {} ephemerides: its satellites are not used",
+                r.nav_path.display(),
+                sys.name()
+            ));
+        }
+    }
     let plan = SignalPlan {
         systems: systems.clone(),
         codes: r.signals.clone(),
         dual_frequency: r.dual_frequency,
     };
     let obs = read_rinex_obs_all(&src.path)?;
-    let mut warnings: Vec<String> = nav.warnings.iter().chain(&obs.warnings).cloned().collect();
+    warnings.extend(nav.warnings.iter().chain(&obs.warnings).cloned());
     let channels = crate::spp::glonass_channels(&obs.header, orbits.broadcast());
     let epochs = obs.epochs;
     let Some(week) = epochs.first().map(|e| e.t.week) else {

@@ -54,7 +54,7 @@ pub(crate) fn read(cfg: &RunConfig, job: &mut JobResult, warn: bool) -> Result<I
                 ..
             },
         ) => {
-            let g = crate::gnss_input::load_rinex(src, r)?;
+            let g = crate::gnss_input::load_rinex(src, r, &cfg.nav.gnss.systems)?;
             input_notes.extend(g.notes);
             reader_warnings.extend(g.warnings);
             match r.coupling {

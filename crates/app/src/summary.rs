@@ -110,6 +110,10 @@ impl JobResult {
             "events": s.events.iter().map(|e| e.to_string()).collect::<Vec<_>>(),
             "files": self.files.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
         });
+        if s.gnss_sats_ignored > 0 {
+            // Tight coupling: measurements of systems not in `[gnss] systems`.
+            v["gnss"]["sats_ignored"] = s.gnss_sats_ignored.into();
+        }
         if let Some(sm) = &self.smoother {
             v["smoother"] = sm.to_json();
         }

@@ -2,6 +2,7 @@
 //! by `navfuse-io::config`, which converts user units into these structs.
 
 use crate::outage::OutageSchedule;
+use crate::sat::System;
 use crate::types::ImuErrors;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
@@ -186,6 +187,11 @@ pub struct GnssOptions {
     pub fusion: GnssFusion,
     /// Error model of the fixes and the handling of disagreeing ones (fix_error.rs).
     pub fix_error: FixErrorOptions,
+    /// The satellite systems used (`\[gnss\] systems`, GPS only by default): tight
+    /// coupling ignores the measurements of the others and estimates an inter-system
+    /// bias for each of these but GPS (and QZSS and SBAS, on GPS time). The raw-data
+    /// reader and SPP read the same list.
+    pub systems: Vec<System>,
 }
 
 impl Default for GnssOptions {
@@ -202,6 +208,7 @@ impl Default for GnssOptions {
             outages: OutageSchedule::default(),
             fusion: GnssFusion::ErrorState,
             fix_error: FixErrorOptions::default(),
+            systems: vec![System::Gps],
         }
     }
 }
@@ -292,6 +299,24 @@ pub enum RangeRate {
     Tdcp,
 }
 
+/// One number per satellite system, in [`System::ALL`] order.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PerSystem(pub [f64; System::ALL.len()]);
+
+impl PerSystem {
+    pub fn get(&self, s: System) -> f64 {
+        self.0[s.index()]
+    }
+
+    pub fn set(&mut self, s: System, v: f64) {
+        self.0[s.index()] = v;
+    }
+
+    /// RTKLIB's code error factors (`EFACT_*` in rtklib.h, REFERENCES \[RTKLIB\]):
+    /// GPS, Galileo, BeiDou, QZSS 1; GLONASS and NavIC 1.5; SBAS 3.
+    pub const RTKLIB_ERROR_FACTORS: PerSystem = PerSystem([1.0, 1.5, 1.0, 1.0, 1.0, 3.0, 1.5]);
+}
+
 /// Tightly coupled GNSS: receiver clock states, per-satellite gates, cycle slips.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TightOptions {
@@ -329,6 +354,14 @@ pub struct TightOptions {
     /// model (e.g. Selective Availability, 100 m and 1 m/s in seed 000 Table 1).
     pub pseudorange_sigma_floor_m: f64,
     pub range_rate_sigma_floor_mps: f64,
+    /// Factor per system on the pseudorange sigma (after `pseudorange_sigma_scale`,
+    /// before the floor); RTKLIB's error factors by default.
+    pub sigma_scale: PerSystem,
+    /// Random walk of each inter-system bias state \[m/sqrt(s)\].
+    pub isb_psd_sqrt: f64,
+    /// 1-sigma of an inter-system bias when it is set from a system's pseudorange
+    /// residuals \[m\].
+    pub isb_init_sigma_m: f64,
 }
 
 impl Default for TightOptions {
@@ -349,6 +382,9 @@ impl Default for TightOptions {
             range_rate_sigma_scale: 1.0,
             pseudorange_sigma_floor_m: 0.0,
             range_rate_sigma_floor_mps: 0.0,
+            sigma_scale: PerSystem::RTKLIB_ERROR_FACTORS,
+            isb_psd_sqrt: 0.01,
+            isb_init_sigma_m: 30.0,
         }
     }
 }

@@ -61,9 +61,18 @@ pub enum Event {
     /// `w`; the satellite's carrier differencing restarts.
     CycleSlip {
         t: f64,
-        prn: u8,
+        sat: crate::sat::SatId,
         jump_m: f64,
         w: f64,
+    },
+    /// Tight coupling: the inter-system bias of `system` was set from the median of
+    /// its `sats` satellites' pseudorange residuals (first seen, or back after a long
+    /// absence).
+    IsbSet {
+        t: f64,
+        system: crate::sat::System,
+        isb_m: f64,
+        sats: usize,
     },
     /// The GNSS integrity monitor changed state (spoofing detection).
     Integrity(Transition),
@@ -130,9 +139,19 @@ impl std::fmt::Display for Event {
                     tr.statistic
                 )
             }
-            Event::CycleSlip { t, prn, jump_m, w } => write!(
+            Event::CycleSlip { t, sat, jump_m, w } => write!(
                 f,
-                "{t:.3} G{prn:02} cycle slip: carrier jump {jump_m:.3} m against the INS (w-test {w:.1})"
+                "{t:.3} {sat} cycle slip: carrier jump {jump_m:.3} m against the INS (w-test {w:.1})"
+            ),
+            Event::IsbSet {
+                t,
+                system,
+                isb_m,
+                sats,
+            } => write!(
+                f,
+                "{t:.3} {} inter-system bias set to {isb_m:.3} m from {sats} satellites",
+                system.name()
             ),
             Event::Static { t, begins } => {
                 if *begins {
@@ -235,6 +254,9 @@ pub struct RunSummary {
     pub gnss_rejected: usize,
     pub gnss_in_outage: usize,
     pub gnss_before_start: usize,
+    /// Tight coupling: satellite measurements of systems not in `\[gnss\] systems`,
+    /// ignored.
+    pub gnss_sats_ignored: usize,
     pub outputs: usize,
     pub events: Vec<Event>,
     /// Per aiding source (Aiding::name): updates applied and rejected by their test.

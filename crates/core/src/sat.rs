@@ -33,6 +33,11 @@ impl System {
         System::Navic,
     ];
 
+    /// Position in [`System::ALL`] (for per-system arrays).
+    pub fn index(self) -> usize {
+        self as usize
+    }
+
     /// The RINEX letter.
     pub fn letter(self) -> char {
         match self {
@@ -121,8 +126,9 @@ mod tests {
         assert_eq!(SatId::parse("X01"), None);
         assert_eq!(SatId::parse("G00"), None);
         assert_eq!(SatId::parse("Gxx"), None);
-        for s in System::ALL {
+        for (i, s) in System::ALL.into_iter().enumerate() {
             assert_eq!(System::from_letter(s.letter()), Some(s));
+            assert_eq!(s.index(), i);
         }
         assert!(SatId::parse("G02") < SatId::parse("R01"));
     }

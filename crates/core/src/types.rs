@@ -38,11 +38,14 @@ pub struct GnssFix {
 /// One satellite's measurements at one epoch, prepared by the GNSS layer for tight
 /// coupling (SYSTEM.md §3b; seed 000 eq. 12-18). ECEF at the reception time.
 /// Everything the GNSS layer can model is already removed, so that
-/// `pseudorange_m = |sat_pos - antenna| + receiver clock bias \[m\] + noise`.
+/// `pseudorange_m = |sat_pos - antenna| + receiver clock bias \[m\] + noise`, the
+/// clock bias being that of the satellite's system (GPS time plus, for the other
+/// systems, the inter-system bias the tight coupling estimates, aiding/tight.rs).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SatMeasurement {
-    /// GPS PRN.
-    pub prn: u8,
+    /// The satellite (system and number): per-satellite state (carrier differencing)
+    /// is kept by it, and its system picks the inter-system bias and noise factor.
+    pub sat: crate::sat::SatId,
     /// Satellite position at transmission (light time solved), rotated into the ECEF
     /// frame at reception (Sagnac) \[m\].
     pub sat_pos_ecef_m: Vector3<f64>,

@@ -206,7 +206,11 @@ fn read_inputs(cfg: &RunConfig) -> (Vec<ImuSample>, Vec<Measurement>) {
     let (mut fixes, mut raw) = (Vec::new(), Vec::new());
     if let Some(src) = &cfg.gnss {
         match &src.format {
-            GnssFormat::Rinex(r) => raw = navfuse_app::gnss_input::load_rinex(src, r).unwrap().raw,
+            GnssFormat::Rinex(r) => {
+                raw = navfuse_app::gnss_input::load_rinex(src, r, &cfg.nav.gnss.systems)
+                    .unwrap()
+                    .raw
+            }
             _ => fixes = navfuse_io::gnss::read_gnss(src).unwrap().fixes,
         }
     }

@@ -738,3 +738,83 @@ fn written_toml_spells_out_the_new_sections() {
     }
     println!("{text}");
 }
+
+/// `[gnss] systems` and the multi-system keys of `[gnss.tight]`: defaults (GPS only,
+/// RTKLIB's error factors), letters, partial factor tables, round trips, and errors
+/// naming the key.
+#[test]
+fn gnss_systems_and_inter_system_bias_keys() {
+    use navfuse_core::config::PerSystem;
+    use navfuse_core::sat::System;
+    let rinex = "[gnss]\nfile = \"obs.rnx\"\nformat = \"rinex\"\nnav = \"nav.rnx\"\n";
+    let c = ok("systems_default.toml", &with(rinex));
+    assert_eq!(c.nav.gnss.systems, vec![System::Gps]);
+    assert_eq!(c.nav.tight.sigma_scale, PerSystem::RTKLIB_ERROR_FACTORS);
+    assert_eq!(c.nav.tight.sigma_scale.get(System::Glonass), 1.5);
+    assert_eq!(c.nav.tight.sigma_scale.get(System::Sbas), 3.0);
+    round_trip("systems_default", &c);
+
+    let text = with(&format!(
+        "{rinex}systems = [\"G\", \"E\", \"C\", \"R\", \"J\"]\n\n[gnss.tight]\nsigma_scale = {{ R = 2.0, E = 1.2 }}\nisb_psd_sqrt = 0.02\nisb_init_sigma_m = 50\n"
+    ));
+    let c = ok("systems_multi.toml", &text);
+    use System::*;
+    assert_eq!(
+        c.nav.gnss.systems,
+        vec![Gps, Galileo, BeiDou, Glonass, Qzss]
+    );
+    let s = c.nav.tight.sigma_scale;
+    assert_eq!(
+        (s.get(Glonass), s.get(Galileo), s.get(Gps)),
+        (2.0, 1.2, 1.0)
+    );
+    assert_eq!(s.get(Sbas), 3.0);
+    assert_eq!(c.nav.tight.isb_psd_sqrt, 0.02);
+    assert_eq!(c.nav.tight.isb_init_sigma_m, 50.0);
+    let d = round_trip("systems_multi", &c);
+    assert_eq!(d.nav.gnss.systems, c.nav.gnss.systems);
+
+    check_err(
+        "systems_bad.toml",
+        &format!("{rinex}systems = [\"G\", \"X\"]\n"),
+        "gnss.systems",
+        "systems",
+        "expected a system letter",
+    );
+    check_err(
+        "systems_twice.toml",
+        &format!("{rinex}systems = [\"E\", \"E\"]\n"),
+        "gnss.systems",
+        "systems",
+        "listed twice",
+    );
+    check_err(
+        "systems_empty.toml",
+        &format!("{rinex}systems = []\n"),
+        "gnss.systems",
+        "systems",
+        "at least one",
+    );
+    check_err(
+        "sigma_scale_bad.toml",
+        &format!("{rinex}\n[gnss.tight]\nsigma_scale = {{ Q = 2.0 }}\n"),
+        "gnss.tight.sigma_scale",
+        "sigma_scale",
+        "\"Q\"",
+    );
+    check_err(
+        "sigma_scale_neg.toml",
+        &format!("{rinex}\n[gnss.tight]\nsigma_scale = {{ R = -1 }}\n"),
+        "gnss.tight.sigma_scale.R",
+        "sigma_scale",
+        "> 0",
+    );
+    // Loose coupling of fixes has no satellites to choose.
+    check_err(
+        "systems_kfgins.toml",
+        "[gnss]\nfile = \"gnss.txt\"\nformat = \"kf-gins\"\nsystems = [\"G\"]\n",
+        "gnss.systems",
+        "systems",
+        "rinex",
+    );
+}

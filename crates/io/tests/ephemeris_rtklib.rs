@@ -112,7 +112,6 @@ fn every_system_matches_rtklib() {
     assert!(lines.len() > 100, "{} trace lines", lines.len());
     // RTKLIB numbers satellites internally; map each number to our SatId by the
     // nearest position at its first line.
-    let sats = store.sats();
     let mut map: BTreeMap<u32, SatId> = BTreeMap::new();
     // per system: lines, max |dpos|, max |dclk|, other record closer
     let mut stats: BTreeMap<System, (usize, f64, f64, usize)> = BTreeMap::new();

@@ -23,6 +23,8 @@ pub mod registry;
 pub mod source;
 pub mod tdcp;
 pub mod tight;
+#[cfg(test)]
+mod tight_tests;
 pub mod vehicle_frame;
 pub mod zupt;
 
@@ -45,10 +47,20 @@ pub struct VehicleEstimate {
 /// Receiver clock estimates (tight coupling; zero otherwise).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ReceiverClock {
-    /// c dt_r \[m\].
+    /// c dt_r \[m\] (GPS time).
     pub bias_m: f64,
     /// c dt_r' \[m/s\].
     pub drift_mps: f64,
+    /// Inter-system biases c (dt_sys - dt_GPS) \[m\] by `System::index` (zero for
+    /// GPS, QZSS, SBAS and the systems not estimated; pseudorange.rs).
+    pub isb_m: [f64; crate::sat::System::ALL.len()],
+}
+
+impl ReceiverClock {
+    /// The clock bias a pseudorange of `system` sees, b + ISB_sys \[m\].
+    pub fn bias_for(&self, system: crate::sat::System) -> f64 {
+        self.bias_m + self.isb_m[system.index()]
+    }
 }
 
 /// What the aiding models may read about the current INS solution.
@@ -226,6 +238,7 @@ pub(crate) mod tests {
     const FIXTURE_CLOCK: ReceiverClock = ReceiverClock {
         bias_m: 1234.5,
         drift_mps: -3.2,
+        isb_m: [0.0, -4.0, 7.0, 11.0, 0.0, 0.0, 2.0],
     };
 
     /// Apply an error dx to the true state (state.rs conventions; the IMU error states
@@ -254,6 +267,11 @@ pub(crate) mod tests {
         }
         if let Some(i) = f.layout.index(Block::ClockDrift) {
             clock.drift_mps += dx[i];
+        }
+        for s in crate::sat::System::ALL {
+            if let Some(i) = pseudorange::isb_block(s).and_then(|b| f.layout.index(b)) {
+                clock.isb_m[s.index()] += dx[i];
+            }
         }
         (nav, w, (veh, clock))
     }
@@ -348,13 +366,44 @@ pub(crate) mod tests {
         }
     }
 
+    /// A Galileo pseudorange: the inter-system bias column (and the clock's) besides
+    /// the geometry, with the GPS-only layout and with an ISB state for another system.
+    #[test]
+    fn pseudorange_jacobian_with_inter_system_bias() {
+        use crate::sat::{SatId, System};
+        let mut f = context_fixture(true);
+        f.layout
+            .push(pseudorange::isb_block(System::BeiDou).unwrap());
+        f.layout
+            .push(pseudorange::isb_block(System::Galileo).unwrap());
+        let sat = SatMeasurement {
+            sat: SatId::new(System::Galileo, 5),
+            ..fixture_satellite(&f)
+        };
+        check_linearized(&f, 1e-4, |_| Aiding::Pseudorange(&sat));
+        let c0 = ctx(&f, &f.nav, f.w_ib_b, (f.vehicle, FIXTURE_CLOCK));
+        let l = Aiding::Pseudorange(&sat).linearize(&c0).unwrap();
+        let col = |s| f.layout.index(pseudorange::isb_block(s).unwrap()).unwrap();
+        assert_eq!(l.h[(0, col(System::Galileo))], 1.0);
+        assert_eq!(l.h[(0, col(System::BeiDou))], 0.0);
+        // QZSS and SBAS share the GPS clock: no ISB of their own.
+        assert!(pseudorange::isb_block(System::Qzss).is_none());
+        assert!(pseudorange::isb_block(System::Gps).is_none());
+        // The prediction carries b + ISB_E: 7 m more than the GPS satellite's.
+        let gps = Aiding::Pseudorange(&fixture_satellite(&f))
+            .linearize(&c0)
+            .unwrap()
+            .y[0];
+        assert!((l.y[0] - gps - 7.0).abs() < 1e-6);
+    }
+
     /// A satellite 20,000 km up, north-east of the fixture, moving at 3 km/s.
     pub fn fixture_satellite(f: &Fixture) -> SatMeasurement {
         let r = crate::earth::lla_to_ecef(&f.nav.lla);
         let c = crate::earth::c_ne(f.nav.lla.x, f.nav.lla.y);
         let pos = r + c * Vector3::new(9e6, 7e6, -1.6e7);
         SatMeasurement {
-            prn: 7,
+            sat: crate::sat::SatId::gps(7),
             sat_pos_ecef_m: pos,
             sat_vel_ecef_mps: c * Vector3::new(-1500.0, 2500.0, 600.0),
             elevation_rad: 0.9,

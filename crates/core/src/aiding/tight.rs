@@ -9,8 +9,19 @@
 //! kind is tested jointly per satellite (data snooping) and fused as scalar updates.
 //! After `gate_timeout_s` without a pseudorange used, the single point fix pulls the
 //! solution back first and the carriers restart (Doppler stands in meanwhile).
+//!
+//! Several systems (`\[gnss\] systems`): the clock bias b is on GPS time, and each
+//! other system enabled has an inter-system bias state ISB_sys (a random walk in the
+//! source's own block, pseudorange.rs `isb_block`), set from the median of that
+//! system's pseudorange residuals less b when the system is first seen or back after
+//! `ISB_REINIT_GAP_S`. With no GPS satellite before any ISB is set, the first enabled
+//! system present stands in for GPS: b takes its clock and its ISB starts at 0 with
+//! `isb_init_sigma_m` (b and that ISB are then not separable until GPS comes; the
+//! prior keeps them apart). Doppler and TDCP see one drift for every system (a
+//! difference of drifts between the systems' time scales, ~1e-13, is ignored).
 
 use super::gnss_integrity::GnssGuard;
+use super::pseudorange::isb_block;
 use super::source::{chi2_gate, stack_rows, AidingSource, Fuser, Handled};
 use super::tdcp::{Interval, TdcpPrevious};
 use super::{Aiding, Linearized, ReceiverClock};
@@ -19,13 +30,20 @@ use crate::earth::c_ne;
 use crate::events::{Event, RunSummary};
 use crate::integrity::IntegrityState;
 use crate::nav::ins_filter::{BlockProcess, BlockSpec, Fused};
+use crate::sat::{SatId, System};
 use crate::state::{Block, POS, VEL};
 use crate::types::{GnssFix, GnssRawEpoch, ImuSample, Measurement, SatMeasurement};
 use nalgebra::Vector3;
+use std::collections::BTreeMap;
 
 /// After a return from a GNSS gap (or a carrier disagreement), TDCP waits this long
 /// \[s\] for the pseudoranges and Doppler to correct the INS velocity.
 const CARRIER_WARMUP_S: f64 = 5.0;
+
+/// A system unseen for this long \[s\] has its inter-system bias set again from its
+/// pseudoranges when it comes back (the random walk alone would cover a drift of
+/// `isb_psd_sqrt` sqrt(gap), which a receiver restart or firmware change can exceed).
+const ISB_REINIT_GAP_S: f64 = 600.0;
 
 /// Tight coupling as an aiding source (`\[gnss\] coupling = "tight"`).
 pub struct TightGnss {
@@ -34,8 +52,13 @@ pub struct TightGnss {
     gate_timeout_s: f64,
     guard: Option<GnssGuard>,
     clock_set: bool,
-    /// Previous epoch's carrier per PRN (index = PRN).
-    prev: Vec<Option<TdcpPrevious>>,
+    /// The systems used (`GnssOptions::systems`); the others' measurements are ignored.
+    systems: Vec<System>,
+    /// Previous epoch's carrier per satellite.
+    prev: BTreeMap<SatId, TdcpPrevious>,
+    /// Per system with an inter-system bias state: the last epoch with one of its
+    /// pseudoranges since the bias was set (absent: not set yet).
+    isb_seen_t: BTreeMap<System, f64>,
     /// Time of the previous raw epoch.
     prev_t: Option<f64>,
     /// C_n^e C_b^n l^b at the previous epoch \[m\].
@@ -71,7 +94,9 @@ impl TightGnss {
             gate_timeout_s: cfg.gnss.gate_timeout_s,
             guard: GnssGuard::from_config(cfg),
             clock_set: false,
-            prev: vec![None; 256],
+            systems: cfg.gnss.systems.clone(),
+            prev: BTreeMap::new(),
+            isb_seen_t: BTreeMap::new(),
             prev_t: None,
             prev_lever_ecef_m: Vector3::zeros(),
             last_pr_used_t: None,
@@ -80,10 +105,24 @@ impl TightGnss {
     }
 
     fn clock(f: &Fuser) -> ReceiverClock {
-        ReceiverClock {
+        let mut c = ReceiverClock {
             bias_m: f.extra(Block::ClockBias)[0],
             drift_mps: f.extra(Block::ClockDrift)[0],
+            ..ReceiverClock::default()
+        };
+        for s in System::ALL {
+            if let Some(&v) = isb_block(s).and_then(|b| f.extra(b).first()) {
+                c.isb_m[s.index()] = v;
+            }
         }
+        c
+    }
+
+    /// The systems with an inter-system bias state (enabled, not on GPS time).
+    fn isb_systems(&self) -> impl Iterator<Item = (System, Block)> + '_ {
+        self.systems
+            .iter()
+            .filter_map(|&s| isb_block(s).map(|b| (s, b)))
     }
 
     /// Fuse with the current clock and remember the correction for the monitor.
@@ -107,15 +146,20 @@ impl TightGnss {
         let sats: Vec<SatMeasurement> = epoch
             .sats
             .iter()
+            .filter(|s| self.systems.contains(&s.sat.system))
             .map(|s| SatMeasurement {
-                pseudorange_std_m: (s.pseudorange_std_m * opt.pseudorange_sigma_scale)
-                    .max(opt.pseudorange_sigma_floor_m),
+                pseudorange_std_m: (s.pseudorange_std_m
+                    * opt.pseudorange_sigma_scale
+                    * opt.sigma_scale.get(s.sat.system))
+                .max(opt.pseudorange_sigma_floor_m),
                 range_rate_std_mps: (s.range_rate_std_mps * opt.range_rate_sigma_scale)
                     .max(opt.range_rate_sigma_floor_mps),
                 carrier_std_m: (s.carrier_std_m * opt.range_rate_sigma_scale).max(carrier_floor),
                 ..*s
             })
             .collect();
+        let ignored = epoch.sats.len() - sats.len();
+        f.record().gnss_sats_ignored += ignored;
         self.check_clock(f, epoch.t, &sats);
         if let Some(guard) = self.guard.as_mut() {
             // The epoch as a whole, through its single point fix when it has one: the
@@ -275,9 +319,14 @@ impl TightGnss {
 
     /// Set the clock bias (and drift) states from the measurements at the first
     /// epoch, and again when the common pseudorange residual jumps by more than
-    /// `clock_reset_m` (receivers that steer their clock in millisecond steps).
+    /// `clock_reset_m` (receivers that steer their clock in millisecond steps); then
+    /// the inter-system biases not set yet (`check_isb`). The common residual is
+    /// that of the satellites on GPS time and of the systems whose ISB is set (less
+    /// it); before the clock is set with none of them, the first enabled system
+    /// present stands in for GPS (its ISB set to 0).
     fn check_clock(&mut self, f: &mut Fuser, t: f64, sats: &[SatMeasurement]) {
-        let mut bias: Vec<f64> = Vec::new();
+        // Pseudorange residuals without any clock, with their system.
+        let mut residuals: Vec<(System, f64)> = Vec::new();
         let mut drift: Vec<f64> = Vec::new();
         {
             let ctx = f.context(ReceiverClock::default());
@@ -286,20 +335,101 @@ impl TightGnss {
             for s in sats {
                 let d = s.sat_pos_ecef_m - r_ant;
                 if let Some(p) = s.pseudorange_m {
-                    bias.push(p - d.norm());
+                    residuals.push((s.sat.system, p - d.norm()));
                 }
                 if let Some(rr) = s.range_rate_mps {
                     drift.push(rr - d.normalize().dot(&(s.sat_vel_ecef_mps - v_ant)));
                 }
             }
         }
-        let Some(b) = median(&mut bias) else {
-            return;
-        };
-        let jump = b - Self::clock(f).bias_m;
-        if self.clock_set && jump.abs() <= self.opt.clock_reset_m {
+        let isb = Self::clock(f).isb_m;
+        let mut bias: Vec<f64> = residuals
+            .iter()
+            .filter(|(s, _)| isb_block(*s).is_none() || self.isb_current(f, *s, t))
+            .map(|(s, r)| r - isb[s.index()])
+            .collect();
+        if bias.is_empty() && !self.clock_set {
+            let stand_in = self
+                .isb_systems()
+                .find(|(s, _)| residuals.iter().any(|(x, _)| x == s));
+            if let Some((system, block)) = stand_in {
+                bias = residuals
+                    .iter()
+                    .filter(|(x, _)| *x == system)
+                    .map(|(_, r)| *r)
+                    .collect();
+                self.set_isb(f, t, system, block, 0.0, bias.len());
+            }
+        }
+        if let Some(b) = median(&mut bias) {
+            let jump = b - Self::clock(f).bias_m;
+            if !self.clock_set || jump.abs() > self.opt.clock_reset_m {
+                self.reset_clock(f, t, b, jump, &mut drift);
+            }
+        }
+        self.check_isb(f, t, &residuals);
+    }
+
+    /// Whether the inter-system bias of `system` is set and its system was seen
+    /// within `ISB_REINIT_GAP_S`.
+    fn isb_current(&self, f: &Fuser, system: System, t: f64) -> bool {
+        self.isb_seen_t
+            .get(&system)
+            .is_some_and(|&t0| f.direction().elapsed(t0, t) <= ISB_REINIT_GAP_S)
+    }
+
+    /// Once the clock is set: the inter-system bias of each enabled system present
+    /// and not current, from the median of its pseudorange residuals less the
+    /// clock bias, with `isb_init_sigma_m`.
+    fn check_isb(&mut self, f: &mut Fuser, t: f64, residuals: &[(System, f64)]) {
+        if !self.clock_set {
             return;
         }
+        let b = Self::clock(f).bias_m;
+        let systems: Vec<(System, Block)> = self.isb_systems().collect();
+        for (system, block) in systems {
+            let mut r: Vec<f64> = residuals
+                .iter()
+                .filter(|(s, _)| *s == system)
+                .map(|(_, r)| r - b)
+                .collect();
+            let n = r.len();
+            let Some(m) = median(&mut r) else {
+                continue;
+            };
+            if !self.isb_current(f, system, t) {
+                self.set_isb(f, t, system, block, m, n);
+            }
+            self.isb_seen_t.insert(system, t);
+        }
+    }
+
+    /// Set the inter-system bias of `system` to `isb_m` (from `sats` satellites).
+    fn set_isb(
+        &mut self,
+        f: &mut Fuser,
+        t: f64,
+        system: System,
+        block: Block,
+        isb_m: f64,
+        sats: usize,
+    ) {
+        let i = f.layout().index(block).expect("tight layout");
+        f.flush_covariance();
+        f.reset_state(i, self.opt.isb_init_sigma_m.powi(2));
+        f.extra_mut(block)[0] = isb_m;
+        self.isb_seen_t.insert(system, t);
+        f.push_event(Event::IsbSet {
+            t,
+            system,
+            isb_m,
+            sats,
+        });
+    }
+
+    /// Set the clock bias to `b` (a jump of `jump` from the state), and the drift
+    /// from the median of `drift` at the first epoch.
+    fn reset_clock(&mut self, f: &mut Fuser, t: f64, b: f64, jump: f64, drift: &mut [f64]) {
         let i = f.layout().index(Block::ClockBias).expect("tight layout");
         f.flush_covariance();
         // The bias absorbs the antenna position error: its sigma is the position's.
@@ -307,7 +437,7 @@ impl TightGnss {
         f.reset_state(i, pos_var + 10.0f64.powi(2));
         f.extra_mut(Block::ClockBias)[0] = b;
         if !self.clock_set {
-            if let Some(d) = median(&mut drift) {
+            if let Some(d) = median(drift) {
                 let vel_var: f64 = (0..3).map(|k| f.covariance()[(VEL + k, VEL + k)]).sum();
                 f.reset_state(i + 1, vel_var + 1.0);
                 f.extra_mut(Block::ClockDrift)[0] = d;
@@ -345,7 +475,7 @@ impl TightGnss {
                 .iter()
                 .filter(|s| !s.lost_lock && s.carrier_m.is_some())
             {
-                if let Some(prev) = self.prev[s.prn as usize] {
+                if let Some(&prev) = self.prev.get(&s.sat) {
                     rows.push(Aiding::Tdcp(s, prev, iv));
                 }
             }
@@ -382,7 +512,7 @@ impl TightGnss {
                 if let Aiding::Tdcp(s, _, iv) = a {
                     slips.push(Event::CycleSlip {
                         t,
-                        prn: s.prn,
+                        sat: s.sat,
                         jump_m: blunder * iv.dt_s,
                         w,
                     });
@@ -392,17 +522,18 @@ impl TightGnss {
             Some(used)
         };
         // Remember this epoch (after the updates: the displacement restarts here).
-        for p in self.prev.iter_mut() {
-            *p = None;
-        }
+        self.prev.clear();
         for s in sats {
             if let Some(c) = s.carrier_m {
-                self.prev[s.prn as usize] = Some(TdcpPrevious {
-                    t,
-                    sat_pos_ecef_m: s.sat_pos_ecef_m,
-                    carrier_m: c,
-                    carrier_std_m: s.carrier_std_m,
-                });
+                self.prev.insert(
+                    s.sat,
+                    TdcpPrevious {
+                        t,
+                        sat_pos_ecef_m: s.sat_pos_ecef_m,
+                        carrier_m: c,
+                        carrier_std_m: s.carrier_std_m,
+                    },
+                );
             }
         }
         self.prev_t = Some(t);
@@ -487,8 +618,14 @@ impl AidingSource for TightGnss {
     }
 
     fn blocks(&self) -> Vec<BlockSpec> {
-        // The clock states are set from the first epoch's measurements (check_clock).
-        vec![
+        // The clock states are set from the first epoch's measurements (check_clock),
+        // the inter-system biases from the first of each system's (check_isb).
+        let isb = self.isb_systems().map(|(_, block)| BlockSpec {
+            block,
+            initial_variance: vec![self.opt.isb_init_sigma_m.powi(2)],
+            process: BlockProcess::RandomWalk(self.opt.isb_psd_sqrt.powi(2)),
+        });
+        let mut v = vec![
             BlockSpec {
                 block: Block::ClockBias,
                 initial_variance: vec![1.0],
@@ -499,7 +636,9 @@ impl AidingSource for TightGnss {
                 initial_variance: vec![self.opt.clock_drift_std0_mps.powi(2)],
                 process: BlockProcess::RandomWalk(self.opt.clock_drift_psd_sqrt.powi(2)),
             },
-        ]
+        ];
+        v.extend(isb);
+        v
     }
 
     fn tracks_displacement(&self) -> bool {

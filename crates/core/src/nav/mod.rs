@@ -13,4 +13,4 @@ pub mod timeline;
 #[cfg(test)]
 mod backward_tests;
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

@@ -10,7 +10,7 @@ use crate::outage::OutageSchedule;
 use crate::types::{GnssFix, HeadingObs, ImuErrors, ImuSample, NavState};
 use nalgebra::Vector3;
 
-fn cfg() -> NavConfig {
+pub(crate) fn cfg() -> NavConfig {
     let noise = ImuNoise {
         arw: Vector3::repeat(1e-5),
         vrw: Vector3::repeat(1e-4),
@@ -47,6 +47,7 @@ fn cfg() -> NavConfig {
             outages: OutageSchedule::default(),
             fusion: GnssFusion::ErrorState,
             fix_error: crate::config::FixErrorOptions::white(),
+            systems: vec![crate::sat::System::Gps],
         },
         filter: FilterOptions {
             covariance_period_s: 0.0,
@@ -66,7 +67,7 @@ fn cfg() -> NavConfig {
 }
 
 /// Exact increments of a stationary IMU over `dt` (gravity and Earth rate only).
-fn static_sample(c: &NavConfig, t: f64, dt: f64) -> ImuSample {
+pub(crate) fn static_sample(c: &NavConfig, t: f64, dt: f64) -> ImuSample {
     let lla = c.initial.lla.unwrap();
     let AttitudeInit::Given(rpy) = c.initial.attitude else {
         unreachable!()

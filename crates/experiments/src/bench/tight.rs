@@ -208,7 +208,7 @@ pub fn main(
     let mut raw = Vec::new();
     for _ in 0..repeat {
         let t = Instant::now();
-        let g = navfuse_app::gnss_input::load_rinex(src, rinex)?;
+        let g = navfuse_app::gnss_input::load_rinex(src, rinex, &cfg.nav.gnss.systems)?;
         best_gnss = best_gnss.min(t.elapsed().as_secs_f64());
         raw = g.raw;
     }

@@ -75,7 +75,7 @@ pub(crate) fn gnss_only_track(cfg: &RunConfig) -> Result<Vec<TrajPoint>> {
     else {
         bail!("the GNSS-only variant needs a RINEX input");
     };
-    let g = navfuse_app::gnss_input::load_rinex(src, r)?;
+    let g = navfuse_app::gnss_input::load_rinex(src, r, &cfg.nav.gnss.systems)?;
     Ok(navfuse_io::trajectory::points_of_fixes(&g.fixes))
 }
 

@@ -513,7 +513,7 @@ impl<O: OrbitSource> EpochPreparer<O> {
             },
         );
         Some(SatMeasurement {
-            prn: s.sat.prn,
+            sat: s.sat,
             sat_pos_ecef_m: sp.sat_pos_ecef_m,
             sat_vel_ecef_mps: sp.sat_vel_ecef_mps,
             elevation_rad: el,

@@ -199,7 +199,7 @@ pub(crate) fn residuals(p: &PreparedEpoch, rx: &Receiver, dt_s: f64) -> Vec<Resi
             let los = d / d.norm();
             let rate = los.dot(&(m.sat_vel_ecef_mps - rx.vel_ecef_mps));
             (
-                m.prn,
+                m.sat.prn,
                 m.pseudorange_m.unwrap() - d.norm() - rx.clock(dt_s),
                 m.range_rate_mps.unwrap() - rate - rx.drift_mps,
                 m.carrier_m
@@ -267,7 +267,7 @@ fn carrier_continuity_and_lost_lock() {
         .raw
         .sats
         .iter()
-        .map(|m| m.prn)
+        .map(|m| m.sat.prn)
         .collect();
     let (a, b, d) = (prns[0], prns[1], prns[2]);
     for k in 1..7 {
@@ -289,14 +289,14 @@ fn carrier_continuity_and_lost_lock() {
         let p = prep.prepare(&ep, 2381);
         for m in &p.raw.sats {
             let expect = match k {
-                2 => m.prn == a,
-                4 => m.prn == b || m.prn == d,
+                2 => m.sat.prn == a,
+                4 => m.sat.prn == b || m.sat.prn == d,
                 6 => true,
                 _ => false,
             };
-            assert_eq!(m.lost_lock, expect, "epoch {k} G{:02}", m.prn);
+            assert_eq!(m.lost_lock, expect, "epoch {k} G{:02}", m.sat.prn);
         }
-        assert_eq!(p.raw.sats.iter().any(|m| m.prn == b), k != 3);
+        assert_eq!(p.raw.sats.iter().any(|m| m.sat.prn == b), k != 3);
         for (prn, pr, _, cr) in residuals(&p, &rx, dt) {
             assert!(pr.abs() < 1e-3, "G{prn:02}: {pr}");
             if prn != d || k != 3 {
@@ -342,6 +342,7 @@ fn dgps_corrections_replace_the_models() {
         .prepare(&observe(&ephs, t0(), 0.0, &rx, NO_ATM, &no_extra), 2381)
         .raw
         .sats[2]
+        .sat
         .prn;
     let extra = move |prn: u8, dt: f64| {
         let p = f64::from(prn);

@@ -5,6 +5,7 @@
 use std::path::Path;
 
 use navfuse_core::config::{FixErrorOptions, GnssFusion, GnssOptions, RangeRate, TightOptions};
+use navfuse_core::sat::System;
 use serde::{Deserialize, Serialize};
 
 use super::error::{kerr, KResult};
@@ -13,7 +14,7 @@ use super::paths::{file_key, PathWriter};
 use super::rinex;
 use super::tight::TTight;
 use super::units::{arr3, vec3, SAME};
-use super::validate::{finite, gate, non_negative, opt_or, positive, std3, v3};
+use super::validate::{finite, gate, non_negative, opt_or, positive, std3, system_letter, v3};
 use super::values::{Gate, Num3, OneOrMany};
 use super::RelativeOutage;
 use crate::input::{Coupling, GnssFormat, GnssSource};
@@ -73,6 +74,8 @@ pub(super) struct TGnss {
     pub(super) dgps_reference_position_deg_m: Option<Vec<f64>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) dgps_max_age_s: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) systems: Option<Vec<String>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) tight: Option<TTight>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -136,6 +139,7 @@ impl TGnss {
             dgps_reference_obs: None,
             dgps_reference_position_deg_m: None,
             dgps_max_age_s: None,
+            systems: None,
             tight: None,
             quality: None,
             decimate_s: None,
@@ -180,6 +184,7 @@ pub(super) fn convert(
             g.dgps_reference_position_deg_m.is_some(),
         ),
         ("gnss.dgps_max_age_s", g.dgps_max_age_s.is_some()),
+        ("gnss.systems", g.systems.is_some()),
         ("gnss.tight", g.tight.is_some()),
     ];
     if g.format != TGnssFormat::Rinex {
@@ -322,8 +327,32 @@ pub(super) fn convert(
         outages,
         fusion,
         fix_error,
+        systems: match &g.systems {
+            Some(letters) => convert_systems(letters)?,
+            None => d.systems,
+        },
     };
     Ok((src, opts, relative, tight))
+}
+
+/// `gnss.systems`: RINEX letters, each once, at least one.
+fn convert_systems(letters: &[String]) -> KResult<Vec<System>> {
+    let key = "gnss.systems";
+    if letters.is_empty() {
+        return Err(kerr(
+            key,
+            "expected at least one system, e.g. [\"G\", \"E\"]",
+        ));
+    }
+    let mut out = Vec::with_capacity(letters.len());
+    for l in letters {
+        let s = system_letter(key, l)?;
+        if out.contains(&s) {
+            return Err(kerr(key, format!("{} (\"{l}\") is listed twice", s.name())));
+        }
+        out.push(s);
+    }
+    Ok(out)
 }
 
 /// `gnss.fusion` and `gnss.six_state_every` (SYSTEM.md §5; seed 004 §3): the
@@ -411,6 +440,7 @@ pub(super) fn to_toml(
     };
     if let GnssFormat::Rinex(r) = &g.format {
         rinex::to_toml(r, tight, &mut t, w);
+        t.systems = Some(go.systems.iter().map(|s| s.letter().to_string()).collect());
     }
     t
 }

@@ -2,12 +2,15 @@
 //! coupling is on and which range rate it fuses are `gnss.coupling` and
 //! `gnss.range_rate` (rinex.rs).
 
+use std::collections::BTreeMap;
+
 use navfuse_core::config::TightOptions;
+use navfuse_core::sat::System;
 use serde::{Deserialize, Serialize};
 
 use super::error::{kerr, KResult};
 use super::units::SAME;
-use super::validate::{non_negative, opt_or, positive};
+use super::validate::{non_negative, opt_or, positive, system_letter};
 
 #[derive(Debug, Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
@@ -36,6 +39,13 @@ pub(super) struct TTight {
     pub(super) pseudorange_sigma_floor_m: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) range_rate_sigma_floor_mps: Option<f64>,
+    /// Factor on the pseudorange sigma by system letter (`{ R = 1.5, S = 3 }`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) sigma_scale: Option<BTreeMap<String, f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) isb_psd_sqrt: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) isb_init_sigma_m: Option<f64>,
 }
 
 /// The keys given in `x` replace those of `t`.
@@ -118,6 +128,26 @@ pub(super) fn convert(x: &TTight, t: &mut TightOptions) -> KResult<()> {
         SAME,
         d.range_rate_sigma_floor_mps,
     )?;
+    for (letter, &v) in x.sigma_scale.iter().flatten() {
+        let key = k("sigma_scale");
+        let system = system_letter(&key, letter)?;
+        t.sigma_scale
+            .set(system, positive(&format!("{key}.{letter}"), v)?);
+    }
+    t.isb_psd_sqrt = opt_or(
+        &k("isb_psd_sqrt"),
+        x.isb_psd_sqrt,
+        positive,
+        SAME,
+        d.isb_psd_sqrt,
+    )?;
+    t.isb_init_sigma_m = opt_or(
+        &k("isb_init_sigma_m"),
+        x.isb_init_sigma_m,
+        positive,
+        SAME,
+        d.isb_init_sigma_m,
+    )?;
     Ok(())
 }
 
@@ -135,5 +165,13 @@ pub(super) fn to_toml(tight: &TightOptions) -> TTight {
         range_rate_sigma_scale: Some(tight.range_rate_sigma_scale),
         pseudorange_sigma_floor_m: Some(tight.pseudorange_sigma_floor_m),
         range_rate_sigma_floor_mps: Some(tight.range_rate_sigma_floor_mps),
+        sigma_scale: Some(
+            System::ALL
+                .iter()
+                .map(|&s| (s.letter().to_string(), tight.sigma_scale.get(s)))
+                .collect(),
+        ),
+        isb_psd_sqrt: Some(tight.isb_psd_sqrt),
+        isb_init_sigma_m: Some(tight.isb_init_sigma_m),
     }
 }

@@ -9,6 +9,29 @@ use super::units::{vec3, Unit};
 use super::values::{Gate, Num3};
 use crate::error::{check_finite_si, check_scale};
 
+/// A satellite system by its RINEX letter (`G`, `R`, `E`, `C`, `J`, `S`, `I`).
+pub(super) fn system_letter(key: &str, letter: &str) -> KResult<navfuse_core::sat::System> {
+    use navfuse_core::sat::System;
+    let mut chars = letter.chars();
+    match (chars.next(), chars.next()) {
+        (Some(c), None) if c != ' ' => System::from_letter(c),
+        _ => None,
+    }
+    .ok_or_else(|| {
+        let all: Vec<String> = System::ALL
+            .iter()
+            .map(|s| format!("{} ({})", s.letter(), s.name()))
+            .collect();
+        kerr(
+            key,
+            format!(
+                "expected a system letter, one of {}, got \"{letter}\"",
+                all.join(", ")
+            ),
+        )
+    })
+}
+
 pub(super) fn finite(key: &str, v: f64) -> KResult<f64> {
     if v.is_finite() {
         Ok(v)
