@@ -312,9 +312,8 @@ impl PerSystem {
         self.0[s.index()] = v;
     }
 
-    /// RTKLIB's code error factors (`EFACT_*` in rtklib.h, REFERENCES \[RTKLIB\]):
-    /// GPS, Galileo, BeiDou, QZSS 1; GLONASS and NavIC 1.5; SBAS 3.
-    pub const RTKLIB_ERROR_FACTORS: PerSystem = PerSystem([1.0, 1.5, 1.0, 1.0, 1.0, 3.0, 1.5]);
+    /// 1 for every system.
+    pub const ONES: PerSystem = PerSystem([1.0; System::ALL.len()]);
 }
 
 /// Tightly coupled GNSS: receiver clock states, per-satellite gates, cycle slips.
@@ -355,7 +354,8 @@ pub struct TightOptions {
     pub pseudorange_sigma_floor_m: f64,
     pub range_rate_sigma_floor_mps: f64,
     /// Factor per system on the pseudorange sigma (after `pseudorange_sigma_scale`,
-    /// before the floor); RTKLIB's error factors by default.
+    /// before the floor); 1 by default: the GNSS layer's sigmas already carry each
+    /// system's error factor (RTKLIB's EFACT_*, `navfuse_gnss::spp::system_error_factor`).
     pub sigma_scale: PerSystem,
     /// Random walk of each inter-system bias state \[m/sqrt(s)\].
     pub isb_psd_sqrt: f64,
@@ -382,7 +382,7 @@ impl Default for TightOptions {
             range_rate_sigma_scale: 1.0,
             pseudorange_sigma_floor_m: 0.0,
             range_rate_sigma_floor_mps: 0.0,
-            sigma_scale: PerSystem::RTKLIB_ERROR_FACTORS,
+            sigma_scale: PerSystem::ONES,
             isb_psd_sqrt: 0.01,
             isb_init_sigma_m: 30.0,
         }

@@ -740,7 +740,7 @@ fn written_toml_spells_out_the_new_sections() {
 }
 
 /// `[gnss] systems` and the multi-system keys of `[gnss.tight]`: defaults (GPS only,
-/// RTKLIB's error factors), letters, partial factor tables, round trips, and errors
+/// factors 1: the GNSS layer applies RTKLIB's), letters, partial factor tables, round trips, and errors
 /// naming the key.
 #[test]
 fn gnss_systems_and_inter_system_bias_keys() {
@@ -749,9 +749,8 @@ fn gnss_systems_and_inter_system_bias_keys() {
     let rinex = "[gnss]\nfile = \"obs.rnx\"\nformat = \"rinex\"\nnav = \"nav.rnx\"\n";
     let c = ok("systems_default.toml", &with(rinex));
     assert_eq!(c.nav.gnss.systems, vec![System::Gps]);
-    assert_eq!(c.nav.tight.sigma_scale, PerSystem::RTKLIB_ERROR_FACTORS);
-    assert_eq!(c.nav.tight.sigma_scale.get(System::Glonass), 1.5);
-    assert_eq!(c.nav.tight.sigma_scale.get(System::Sbas), 3.0);
+    assert_eq!(c.nav.tight.sigma_scale, PerSystem::ONES);
+    assert_eq!(c.nav.tight.sigma_scale.get(System::Glonass), 1.0);
     round_trip("systems_default", &c);
 
     let text = with(&format!(
@@ -768,7 +767,7 @@ fn gnss_systems_and_inter_system_bias_keys() {
         (s.get(Glonass), s.get(Galileo), s.get(Gps)),
         (2.0, 1.2, 1.0)
     );
-    assert_eq!(s.get(Sbas), 3.0);
+    assert_eq!(s.get(Sbas), 1.0);
     assert_eq!(c.nav.tight.isb_psd_sqrt, 0.02);
     assert_eq!(c.nav.tight.isb_init_sigma_m, 50.0);
     let d = round_trip("systems_multi", &c);
@@ -816,5 +815,73 @@ fn gnss_systems_and_inter_system_bias_keys() {
         "gnss.systems",
         "systems",
         "rinex",
+    );
+}
+
+/// `[gnss] signals`, `dual_frequency`, `orbits`, `sp3`, `clk`: parsed, written back,
+/// and refused with the key named.
+#[test]
+fn gnss_signals_and_orbits_keys() {
+    use navfuse_io::input::{GnssFormat, Orbits};
+    let rinex = "[gnss]\nfile = \"obs.rnx\"\nformat = \"rinex\"\nnav = \"nav.rnx\"\n";
+    let rinex_of = |c: &RunConfig| match &c.gnss.as_ref().unwrap().format {
+        GnssFormat::Rinex(r) => r.clone(),
+        f => panic!("{f:?}"),
+    };
+    let r = rinex_of(&ok("signals_default.toml", &with(rinex)));
+    assert!(r.signals.is_empty() && !r.dual_frequency);
+    assert_eq!(r.orbits, Orbits::Broadcast);
+    let text = with(&format!(
+        "{rinex}signals = {{ R = [\"C1P\", \"C1C\"], E = [\"C1X\"] }}\ndual_frequency = true\n\
+         orbits = \"sp3\"\nsp3 = [\"a.sp3\", \"b.sp3\"]\nclk = [\"a.clk\"]\n"
+    ));
+    let c = ok("signals_multi.toml", &text);
+    let r = rinex_of(&c);
+    let codes: Vec<String> = r
+        .signals
+        .iter()
+        .map(|(s, c)| {
+            format!(
+                "{}:{}",
+                s.letter(),
+                c.iter()
+                    .map(|x| x.to_string())
+                    .collect::<Vec<_>>()
+                    .join("+")
+            )
+        })
+        .collect();
+    assert_eq!(codes, vec!["E:C1X", "R:C1P+C1C"]);
+    assert!(r.dual_frequency);
+    match &r.orbits {
+        Orbits::Sp3 { sp3, clk } => {
+            assert_eq!((sp3.len(), clk.len()), (2, 1));
+            assert!(sp3[1].ends_with("b.sp3"));
+        }
+        o => panic!("{o:?}"),
+    }
+    let back = c.to_toml_string();
+    let d = ok("signals_multi_rt.toml", &back);
+    assert_eq!(rinex_of(&d), r, "{back}");
+    check_err(
+        "signals_bad.toml",
+        &format!("{rinex}signals = {{ R = [\"L1P\"] }}\n"),
+        "gnss.signals",
+        "signals",
+        "not a RINEX 3 code observation",
+    );
+    check_err(
+        "orbits_bad.toml",
+        &format!("{rinex}orbits = \"precise\"\n"),
+        "gnss.orbits",
+        "orbits",
+        "expected \"broadcast\" or \"sp3\"",
+    );
+    check_err(
+        "sp3_missing.toml",
+        &format!("{rinex}orbits = \"sp3\"\n"),
+        "gnss.orbits",
+        "orbits",
+        "needs sp3",
     );
 }

@@ -115,7 +115,7 @@ pub(super) fn convert(g: &TGnss, base: &Path) -> KResult<(RinexGnss, TightOption
             let sp3 = paths("gnss.sp3", &g.sp3)?;
             if sp3.is_empty() {
                 return Err(kerr(
-                    "gnss.sp3",
+                    "gnss.orbits",
                     "orbits = \"sp3\" needs sp3 = [\"FILE.sp3\", ...]",
                 ));
             }
