@@ -35,11 +35,17 @@ pub struct RinexInput {
 /// The GNSS layer's settings for a RINEX input.
 pub fn prep_config(r: &RinexGnss, iono: IonoModel) -> TightPrepConfig {
     let d = TightPrepConfig::default();
+    let mut errors = d.spp.errors.clone();
+    if let Some((sigma, reference)) = r.cn0_weighting {
+        errors.cn0_sigma_m = Some(sigma);
+        errors.cn0_reference_dbhz = reference;
+    }
     TightPrepConfig {
         spp: SppConfig {
             elevation_mask_rad: r.elevation_mask_deg.to_radians(),
             iono,
             fde: r.fde,
+            errors,
             ..d.spp
         },
         dgps_max_age_s: r.dgps.as_ref().map_or(d.dgps_max_age_s, |g| g.max_age_s),

@@ -46,6 +46,8 @@ pub struct SppJob {
     /// Weight as RTKLIB 2.4.3's pntpos does, to compare with rnx2rtkp: elevation
     /// term b^2 / sin el (navfuse: b^2 / sin^2 el) and its Galileo SISA indexing.
     pub rtklib_weights: bool,
+    /// C/N0 weighting (sigma \[m\], reference \[dB-Hz\]); None: off.
+    pub cn0_weighting: Option<(f64, f64)>,
 }
 
 /// The solutions, one per observation epoch, and what the run found.
@@ -188,6 +190,10 @@ pub fn run_spp(job: &SppJob) -> Result<SppRun, Error> {
     if job.rtklib_weights {
         cfg.errors.elevation_sin_power = 1.0;
         cfg.errors.rtklib_sisa = true;
+    }
+    if let Some((sigma, reference)) = job.cn0_weighting {
+        cfg.errors.cn0_sigma_m = Some(sigma);
+        cfg.errors.cn0_reference_dbhz = reference;
     }
     let precise = if job.sp3.is_empty() {
         if !job.clk.is_empty() {

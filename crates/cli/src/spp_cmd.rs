@@ -42,6 +42,14 @@ pub struct SppArgs {
     /// Troposphere: saas (Saastamoinen) or off.
     #[arg(long, default_value = "saas", value_parser = ["saas", "off"])]
     pub tropo: String,
+    /// C/N0 weighting: add s^2 10^(0.1 max(REF - C/N0, 0)) to each pseudorange's
+    /// variance, with s this value [m] (RTKLIB demo5's stats-errsnr model; off by
+    /// default).
+    #[arg(long, value_name = "M")]
+    pub cn0_sigma: Option<f64>,
+    /// REF of --cn0-sigma [dB-Hz].
+    #[arg(long, default_value_t = 52.0, value_name = "DBHZ")]
+    pub cn0_reference: f64,
     /// No fault detection and exclusion (the chi-square test of the residuals).
     #[arg(long)]
     pub no_fde: bool,
@@ -61,6 +69,17 @@ pub fn main(a: &SppArgs) -> Result<()> {
         Some(x) => parse_codes(x).map_err(|e| anyhow!("--signals: {e}"))?,
         None => Vec::new(),
     };
+    if let Some(s) = a.cn0_sigma {
+        if !(s.is_finite() && s > 0.0) {
+            bail!("--cn0-sigma: expected a sigma > 0 m, got {s}");
+        }
+    }
+    if !(10.0..=70.0).contains(&a.cn0_reference) {
+        bail!(
+            "--cn0-reference: expected 10-70 dB-Hz, got {}",
+            a.cn0_reference
+        );
+    }
     let job = SppJob {
         obs: a.obs.clone(),
         navs: a.nav.clone(),
@@ -74,6 +93,7 @@ pub fn main(a: &SppArgs) -> Result<()> {
         troposphere: a.tropo == "saas",
         fde: !a.no_fde,
         rtklib_weights: a.rtklib_weights,
+        cn0_weighting: a.cn0_sigma.map(|s| (s, a.cn0_reference)),
     };
     let run = run_spp(&job)?;
     for n in &run.notes {

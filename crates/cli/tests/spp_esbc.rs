@@ -200,6 +200,7 @@ fn esbc_doppler_velocity_of_a_static_station() {
         troposphere: true,
         fde: true,
         rtklib_weights: false,
+        cn0_weighting: None,
     };
     let run = navfuse_app::spp::run_spp(&job).unwrap();
     let speeds: Vec<f64> = run

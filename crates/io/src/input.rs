@@ -200,6 +200,9 @@ pub struct RinexGnss {
     pub dual_frequency: bool,
     /// Where the orbits and clocks come from (`gnss.orbits`).
     pub orbits: Orbits,
+    /// C/N0 weighting: sigma \[m\] of the term s^2 10^(0.1 max(ref - C/N0, 0)) and
+    /// ref \[dB-Hz\] (`gnss.cn0_sigma_m`, `gnss.cn0_reference_dbhz`); None: off.
+    pub cn0_weighting: Option<(f64, f64)>,
 }
 
 /// `gnss.orbits`: broadcast ephemerides (the navigation file) or precise products.

@@ -181,6 +181,7 @@ pub fn run_config(sc: &Scenario, dir: &Path) -> RunConfig {
                     signals: Vec::new(),
                     dual_frequency: false,
                     orbits: Default::default(),
+                    cn0_weighting: None,
                 }),
                 decimate_s: None,
                 time_offset_s: 0.0,

@@ -157,6 +157,7 @@ pub(crate) fn seed000_gnss(cfg: &mut RunConfig, coupling: Coupling, dgps: bool) 
             signals: Vec::new(),
             dual_frequency: false,
             orbits: Default::default(),
+            cn0_weighting: None,
         }),
         decimate_s: None,
         time_offset_s: 0.0,

@@ -69,6 +69,12 @@ pub struct SppErrorModel {
     /// Doppler error \[Hz\] (sets the velocity covariance; the velocity fit is
     /// unweighted).
     pub doppler_sigma_hz: f64,
+    /// Signal-strength term s: s^2 10^(0.1 max(C/N0_ref - C/N0, 0)) is added to the
+    /// variance of a measurement with a C/N0 (RTKLIB demo5's `stats-errsnr` model);
+    /// None (default): no C/N0 weighting.
+    pub cn0_sigma_m: Option<f64>,
+    /// C/N0_ref of that term [dB-Hz] (default 52, demo5's `stats-snrmax`).
+    pub cn0_reference_dbhz: f64,
 }
 
 impl Default for SppErrorModel {
@@ -87,6 +93,8 @@ impl Default for SppErrorModel {
             tropo_none_sigma_m: 3.0,
             dgps_sigma_m: 1.0,
             doppler_sigma_hz: 1.0,
+            cn0_sigma_m: None,
+            cn0_reference_dbhz: 52.0,
         }
     }
 }
@@ -112,6 +120,15 @@ impl SppErrorModel {
     /// The same for a satellite of `system`: times the system's factor squared.
     pub fn system_elevation_variance_m2(&self, system: System, el_rad: f64) -> f64 {
         system_error_factor(system).powi(2) * self.elevation_variance_m2(el_rad)
+    }
+
+    /// The signal-strength variance term [m^2] for a measurement with `cn0_dbhz`
+    /// (0 without the term or a C/N0).
+    pub fn cn0_variance_m2(&self, cn0_dbhz: Option<f64>) -> f64 {
+        match (self.cn0_sigma_m, cn0_dbhz.filter(|c| c.is_finite())) {
+            (Some(s), Some(c)) => s * s * 10f64.powf(0.1 * (self.cn0_reference_dbhz - c).max(0.0)),
+            _ => 0.0,
+        }
     }
 }
 

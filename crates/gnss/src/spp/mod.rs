@@ -69,6 +69,8 @@ pub struct SppMeasurement {
     pub iono_free_with: Option<u8>,
     /// Doppler \[Hz\] on `frequency_hz` (positive when the satellite approaches).
     pub doppler_hz: Option<f64>,
+    /// Signal strength C/N0 [dB-Hz] (for `SppErrorModel::cn0_sigma_m`).
+    pub cn0_dbhz: Option<f64>,
     /// DGPS correction to add to the pseudorange, evaluated at this epoch
     /// (prc + rrc (t - t_s), `dgps::DgpsCorrection::at_m`) \[m\]. When present the
     /// ionosphere and troposphere models are not applied to this satellite (the
@@ -86,6 +88,7 @@ impl SppMeasurement {
             band: 1,
             iono_free_with: None,
             doppler_hz,
+            cn0_dbhz: None,
             dgps_prc_m: None,
         }
     }
@@ -105,6 +108,7 @@ impl From<&crate::signal_plan::ChosenSignal> for SppMeasurement {
             band: c.code.band(),
             iono_free_with: c.iono_free_with,
             doppler_hz: c.doppler_hz,
+            cn0_dbhz: c.cn0_dbhz,
             dgps_prc_m: None,
         }
     }

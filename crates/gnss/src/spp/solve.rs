@@ -48,6 +48,8 @@ pub(super) struct Candidate<'a> {
     /// (f_L1 / f)^2: the L1 ionospheric delay on this signal.
     iono_scale: f64,
     pub(super) doppler_hz: Option<f64>,
+    /// The C/N0 variance term (`SppErrorModel::cn0_variance_m2`) [m^2].
+    cn0_var_m2: f64,
     pub(super) wavelength_m: f64,
     pub(super) orbit: SelectedOrbit<'a>,
 }
@@ -178,7 +180,7 @@ fn build_rows(
             iono_m,
             c.dgps,
             c.iono_free,
-        );
+        ) + c.cn0_var_m2;
         let los = sp.los_unit;
         let mut h = VecX::zeros();
         h[0] = -los.x;
@@ -361,6 +363,7 @@ pub fn solve_epoch(
                 group_delay_s,
                 iono_scale: (GPS_L1_HZ / m.frequency_hz).powi(2),
                 doppler_hz: m.doppler_hz,
+                cn0_var_m2: cfg.errors.cn0_variance_m2(m.cn0_dbhz),
                 wavelength_m: m.wavelength_m(),
                 orbit,
             }),

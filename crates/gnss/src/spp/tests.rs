@@ -354,3 +354,29 @@ fn ura_rounds_up_to_the_is_gps_200_bound() {
     assert_eq!(ura_variance_m2(1e5), 6144.0 * 6144.0);
     assert_eq!(ura_variance_m2(f64::NAN), 6144.0 * 6144.0);
 }
+
+#[test]
+fn cn0_weighting_adds_the_signal_strength_term() {
+    let (ephs, t_rx, _, mut meas) = setup();
+    let mut cfg = config();
+    let plain = solve_epoch(&ephs, t_rx, &meas, &cfg, None).unwrap();
+    meas.iter_mut()
+        .enumerate()
+        .for_each(|(k, m)| m.cn0_dbhz = Some(if k == 0 { 32.0 } else { 52.0 }));
+    // Off by default: C/N0 given, weights unchanged.
+    let same = solve_epoch(&ephs, t_rx, &meas, &cfg, None).unwrap();
+    assert_eq!(plain.satellites, same.satellites);
+    cfg.errors.cn0_sigma_m = Some(0.5);
+    let w = solve_epoch(&ephs, t_rx, &meas, &cfg, None).unwrap();
+    for (a, b) in plain.satellites.iter().zip(&w.satellites) {
+        // 20 dB below the reference: 0.5^2 x 100 = 25 m^2 more; at it: 0.25 m^2.
+        let extra = if a.sat == meas[0].sat { 25.0 } else { 0.25 };
+        assert!(
+            (b.sigma_m.powi(2) - a.sigma_m.powi(2) - extra).abs() < 1e-9,
+            "{}",
+            a.sat
+        );
+    }
+    assert_eq!(cfg.errors.cn0_variance_m2(None), 0.0);
+    assert_eq!(cfg.errors.cn0_variance_m2(Some(f64::NAN)), 0.0);
+}

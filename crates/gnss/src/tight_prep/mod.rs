@@ -467,7 +467,7 @@ impl<O: OrbitSource> EpochPreparer<O> {
             code_iono_m,
             corr.is_some(),
             s.iono_free_with.is_some(),
-        );
+        ) + cfg.errors.cn0_variance_m2(s.cn0_dbhz);
         let em = &cfg.errors;
         let el_scale = (em.elevation_variance_m2(el)
             / em.elevation_variance_m2(std::f64::consts::FRAC_PI_2))

@@ -65,6 +65,10 @@ pub(super) struct TGnss {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) clk: Option<Vec<String>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) cn0_sigma_m: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) cn0_reference_dbhz: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) dgps: Option<bool>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) dgps_corrections: Option<String>,
@@ -134,6 +138,8 @@ impl TGnss {
             orbits: None,
             sp3: None,
             clk: None,
+            cn0_sigma_m: None,
+            cn0_reference_dbhz: None,
             dgps: None,
             dgps_corrections: None,
             dgps_reference_obs: None,

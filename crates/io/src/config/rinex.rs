@@ -17,6 +17,8 @@ use crate::input::{Coupling, DgpsKind, DgpsSource, Orbits, RinexGnss};
 
 /// Default `gnss.elevation_mask_deg`.
 pub const DEFAULT_ELEVATION_MASK_DEG: f64 = 10.0;
+/// Default `gnss.cn0_reference_dbhz` (RTKLIB demo5's `stats-snrmax`).
+pub const DEFAULT_CN0_REFERENCE_DBHZ: f64 = 52.0;
 /// Default `gnss.dgps_max_age_s`.
 pub const DEFAULT_DGPS_MAX_AGE_S: f64 = 30.0;
 
@@ -131,6 +133,26 @@ pub(super) fn convert(g: &TGnss, base: &Path) -> KResult<(RinexGnss, TightOption
             ))
         }
     };
+    let cn0_weighting = match (g.cn0_sigma_m, g.cn0_reference_dbhz) {
+        (None, None) => None,
+        (None, Some(_)) => {
+            return Err(kerr(
+                "gnss.cn0_reference_dbhz",
+                "cn0_reference_dbhz needs cn0_sigma_m (the C/N0 weighting's sigma)",
+            ))
+        }
+        (Some(s), r) => {
+            let s = positive("gnss.cn0_sigma_m", s)?;
+            let r = r.unwrap_or(DEFAULT_CN0_REFERENCE_DBHZ);
+            if !(r.is_finite() && (10.0..=70.0).contains(&r)) {
+                return Err(kerr(
+                    "gnss.cn0_reference_dbhz",
+                    format!("expected 10-70 dB-Hz, got {r}"),
+                ));
+            }
+            Some((s, r))
+        }
+    };
     let mut t = TightOptions {
         enabled: coupling == Coupling::Tight,
         range_rate: g.range_rate.unwrap_or(TightOptions::default().range_rate),
@@ -149,6 +171,7 @@ pub(super) fn convert(g: &TGnss, base: &Path) -> KResult<(RinexGnss, TightOption
             signals,
             dual_frequency: g.dual_frequency.unwrap_or(false),
             orbits,
+            cn0_weighting,
         },
         t,
     ))
@@ -184,6 +207,10 @@ pub(super) fn to_toml(r: &RinexGnss, tight: &TightOptions, t: &mut TGnss, w: &Pa
                 t.clk = Some(clk.iter().map(|p| w.path(p)).collect());
             }
         }
+    }
+    if let Some((sigma, reference)) = r.cn0_weighting {
+        t.cn0_sigma_m = Some(sigma);
+        t.cn0_reference_dbhz = Some(reference);
     }
     t.dgps = Some(r.dgps.is_some());
     if let Some(d) = &r.dgps {
