@@ -1,7 +1,9 @@
 //! Signal geometry: light-time iteration, Earth rotation during transit (Sagnac),
 //! range, range rate, line of sight, azimuth and elevation.
 
-use crate::ephemeris::{GpsEphemeris, GPS_OMEGA_E_RAD_PER_S, SPEED_OF_LIGHT_MPS};
+use crate::ephemeris::{
+    Ephemeris, GpsEphemeris, SatState, GPS_OMEGA_E_RAD_PER_S, SPEED_OF_LIGHT_MPS,
+};
 use crate::time::GpsTime;
 use nalgebra::{Matrix3, Vector3};
 use navfuse_core::earth::c_ne;
@@ -50,18 +52,44 @@ fn rot_z_deriv(theta: f64) -> Matrix3<f64> {
     Matrix3::new(-s, c, 0.0, -c, -s, 0.0, 0.0, 0.0, 0.0)
 }
 
+/// A broadcast record that gives the satellite state at a GPST time: the GPS
+/// ephemeris, or any system's ([`Ephemeris`]; the group delay is not applied).
+pub trait StateAt {
+    fn state_at(&self, t: GpsTime) -> SatState;
+}
+
+impl StateAt for GpsEphemeris {
+    fn state_at(&self, t: GpsTime) -> SatState {
+        self.sat_state(t)
+    }
+}
+
+impl<T: StateAt + ?Sized> StateAt for &T {
+    fn state_at(&self, t: GpsTime) -> SatState {
+        (**self).state_at(t)
+    }
+}
+
+impl StateAt for Ephemeris {
+    fn state_at(&self, t: GpsTime) -> SatState {
+        self.sat_state(t)
+    }
+}
+
 /// Solve the light-time equation t_tx = t_rx - |R(We tau) x_sat(t_tx) - x_rx| / c
 /// (tau = t_rx - t_tx) to < 1e-12 s, for a receiver at `rx_pos_ecef_m` moving with
-/// `rx_vel_ecef_mps` (both ECEF at t_rx).
-pub fn signal_path(
-    eph: &GpsEphemeris,
+/// `rx_vel_ecef_mps` (both ECEF at t_rx). The Earth rotation of the Sagnac term is
+/// the WGS-84 (GPS) value for every system (the systems' values differ by 1.5e-12
+/// rad/s: < 1e-5 m).
+pub fn signal_path<E: StateAt + ?Sized>(
+    eph: &E,
     rx_pos_ecef_m: &Vector3<f64>,
     rx_vel_ecef_mps: &Vector3<f64>,
     t_rx: GpsTime,
 ) -> SignalPath {
     let mut tau = 0.075; // typical GPS transit time [s]
     for _ in 0..LIGHT_TIME_MAX_ITER {
-        let st = eph.sat_state(t_rx.add_s(-tau));
+        let st = eph.state_at(t_rx.add_s(-tau));
         let p = rot_z(GPS_OMEGA_E_RAD_PER_S * tau) * st.pos_ecef_m;
         let tau_new = (p - rx_pos_ecef_m).norm() / SPEED_OF_LIGHT_MPS;
         let done = (tau_new - tau).abs() < LIGHT_TIME_TOL_S;
@@ -70,7 +98,7 @@ pub fn signal_path(
             break;
         }
     }
-    let st = eph.sat_state(t_rx.add_s(-tau));
+    let st = eph.state_at(t_rx.add_s(-tau));
     let theta = GPS_OMEGA_E_RAD_PER_S * tau;
     let r = rot_z(theta);
     let pos = r * st.pos_ecef_m;
