@@ -1,11 +1,12 @@
 //! Synthetic constellations: the nominal 24-slot GPS constellation, the six
 //! satellites of seed 000's Table 3, and the bundled Galileo (Walker 24/3/1) and
 //! BeiDou (MEO Walker 24/3/1 + 3 IGSO) constellations of the simulator, with their
-//! broadcast updates ([`reissued`], [`reissued_galileo`], [`reissued_beidou`]).
+//! broadcast updates ([`reissued`], [`reissued_galileo`], [`reissued_beidou`]), and
+//! GLONASS (24 slots, state vectors every 30 min: [`glonass_records`]).
 
 use crate::ephemeris::beidou::gpst_to_bdt;
 use crate::ephemeris::kepler::{KeplerConstants, KeplerOrbit, BEIDOU_CONSTANTS, GALILEO_CONSTANTS};
-use crate::ephemeris::{BeiDouEphemeris, GalileoEphemeris, GpsEphemeris, GPS_PI};
+use crate::ephemeris::{BeiDouEphemeris, GalileoEphemeris, GlonassEphemeris, GpsEphemeris, GPS_PI};
 use crate::time::GpsTime;
 
 /// Baseline 24-slot constellation (GPS SPS Performance Standard, 4th ed. 2008
@@ -666,6 +667,83 @@ pub fn reissued_beidou(
     reissue_records(ephs, from, until, step_s, max_age, &BEIDOU_CONSTANTS)
 }
 
+/// GLONASS nominal semi-major axis [m] (19 100 km altitude, period 11 h 15 min 44 s;
+/// ICD 5.1 §3.1.1) and inclination \[deg\].
+pub const GLONASS_A_M: f64 = 25_508.2e3;
+pub const GLONASS_INCLINATION_DEG: f64 = 64.8;
+/// FDMA channel of slots R01-R24 (antipodal slots share one; the assignment in force
+/// since 2005, ICD 5.1 §3.3.1.4: k in -7..6).
+pub const GLONASS_CHANNELS: [i8; 24] = [
+    1, -4, 5, 6, 1, -4, 5, 6, -2, -7, 0, -1, -2, -7, 0, -1, 4, -3, 3, 2, 4, -3, 3, 2,
+];
+/// Interval of the GLONASS immediate data \[s\] (tb every 30 min).
+pub const GLONASS_TB_STEP_S: f64 = 1_800.0;
+
+/// The bundled GLONASS constellation as broadcast records covering `[from, until]`
+/// (GPST; `leap_s` = GPS - UTC): 24 slots in 3 planes (RAAN 0, 120, 240 deg), 8 per
+/// plane 45 deg apart, phased 15 deg from plane to plane (Walker 24/3/1), a = 25 508.2
+/// km, i = 64.8 deg, channels [`GLONASS_CHANNELS`]. tb falls on hh:15 and hh:45 UTC,
+/// every 30 min. The first record of each slot is the circular Keplerian orbit at its
+/// tb (position and ECEF velocity, PZ-90 = WGS-84 here); each next one is the state of
+/// the previous record integrated by the broadcast model (`GlonassEphemeris::sat_state`:
+/// central field + J2) to its tb, so consecutive records continue one orbit; the
+/// luni-solar accelerations are 0. Clock: -tau_n = af0 and gamma_n = af1 of
+/// [`synthetic_clock`], tau_n carried on from record to record; healthy, age 0.
+pub fn glonass_records(from: GpsTime, until: GpsTime, leap_s: f64) -> Vec<GlonassEphemeris> {
+    let k = &GALILEO_CONSTANTS; // PZ-90.11 GM = 3.986004418e14 as Galileo's
+                                // First tb: the hh:15 / hh:45 UTC at or before `from` minus 15 min.
+    let utc0 = from.add_s(-leap_s - 900.0);
+    let sow0 = ((utc0.sow - 900.0) / GLONASS_TB_STEP_S).floor() * GLONASS_TB_STEP_S + 900.0;
+    let tb0 = GpsTime::new(utc0.week, sow0).add_s(leap_s);
+    let n = (until.diff_s(&tb0) / GLONASS_TB_STEP_S).ceil().max(0.0) as usize + 1;
+    let mut out = Vec::new();
+    for (j, (raan, u)) in walker(24, 3, 1).into_iter().enumerate() {
+        let slot = j as u8 + 1;
+        let (af0, af1, _) = synthetic_clock(slot, 3, 0.0);
+        let o = circular(
+            GLONASS_A_M,
+            GLONASS_INCLINATION_DEG,
+            raan,
+            u,
+            k.mu_m3_per_s2,
+            tb0.sow,
+        );
+        let s0 = o.state(k, 0.0, false);
+        let utc_tb0 = tb0.add_s(-leap_s);
+        let mut e = GlonassEphemeris {
+            slot,
+            tb: tb0,
+            tb_utc_sod_s: utc_tb0.sow.rem_euclid(86_400.0),
+            tau_n_s: -af0,
+            gamma_n: af1,
+            frame_time_s: (utc_tb0.sow - 900.0).rem_euclid(604_800.0),
+            pos_m: s0.pos_ecef_m,
+            vel_mps: s0.vel_ecef_mps,
+            acc_mps2: nalgebra::Vector3::zeros(),
+            health: 0,
+            freq_channel: GLONASS_CHANNELS[j],
+            age_days: 0.0,
+        };
+        for _ in 0..n {
+            let next_tb = e.tb.add_s(GLONASS_TB_STEP_S);
+            let st = e.sat_state(next_tb);
+            let utc = next_tb.add_s(-leap_s);
+            let next = GlonassEphemeris {
+                tb: next_tb,
+                tb_utc_sod_s: utc.sow.rem_euclid(86_400.0),
+                tau_n_s: -st.clock_bias_s,
+                frame_time_s: (utc.sow - 900.0).rem_euclid(604_800.0),
+                pos_m: st.pos_ecef_m,
+                vel_mps: st.vel_ecef_mps,
+                ..e.clone()
+            };
+            out.push(std::mem::replace(&mut e, next));
+        }
+    }
+    out.sort_by(|a, b| a.tb.diff_s(&b.tb).total_cmp(&0.0).then(a.slot.cmp(&b.slot)));
+    out
+}
+
 #[cfg(test)]
 mod reissue_tests {
     use super::*;
@@ -825,6 +903,45 @@ mod multi_tests {
     }
 
     #[test]
+    fn glonass_records_continue_one_orbit_every_30_min() {
+        let t0 = GpsTime::new(2381, 604_800.0 - 30_000.0);
+        let recs = glonass_records(t0, t0.add_s(86_400.0), 18.0);
+        let store = EphemerisStore::new(recs.iter().cloned().map(Ephemeris::Glonass));
+        assert_eq!(store.sats().len(), 24);
+        // tb on hh:15 / hh:45 UTC.
+        for e in &recs {
+            assert_eq!(e.tb_utc_sod_s % 1_800.0, 900.0);
+            assert_eq!(
+                e.l1_frequency_hz(),
+                1_602.0e6 + f64::from(e.freq_channel) * 562.5e3
+            );
+        }
+        let (mut worst_jump, mut r_min, mut r_max) = (0.0f64, f64::MAX, 0.0f64);
+        for sat in store.sats() {
+            let list: Vec<&GlonassEphemeris> = recs.iter().filter(|e| e.slot == sat.prn).collect();
+            assert!(list.len() >= 49);
+            for w in list.windows(2) {
+                // The two records agree half way between their tb.
+                let mid = w[0].tb.add_s(900.0);
+                let (a, b) = (w[0].sat_state(mid), w[1].sat_state(mid));
+                worst_jump = worst_jump.max((a.pos_ecef_m - b.pos_ecef_m).norm());
+                assert!((a.clock_bias_s - b.clock_bias_s).abs() < 1e-15);
+            }
+            for m in 0..=(24 * 12) {
+                let t = t0.add_s(f64::from(m) * 300.0);
+                let e = store.select(sat, t).expect("a record within 15 min");
+                let r = e.sat_state(t).pos_ecef_m.norm();
+                r_min = r_min.min(r);
+                r_max = r_max.max(r);
+            }
+        }
+        eprintln!("GLONASS: radius {r_min:.0}..{r_max:.0} m, record switch {worst_jump:.2e} m");
+        assert!(worst_jump < 1e-3, "{worst_jump}");
+        // J2 makes the initially circular orbit breathe by a few km.
+        assert!(r_min > GLONASS_A_M - 20e3 && r_max < GLONASS_A_M + 20e3);
+    }
+
+    #[test]
     fn at_least_four_of_each_system_above_10_deg_at_mid_latitudes() {
         let t0 = GpsTime::new(2381, 345_600.0);
         let gps = EphemerisStore::new(
@@ -833,10 +950,16 @@ mod multi_tests {
                 .map(Ephemeris::Gps),
         );
         let (gal, bds) = bundled(t0);
+        let glo = EphemerisStore::new(
+            glonass_records(t0, t0.add_s(86_400.0), 18.0)
+                .into_iter()
+                .map(Ephemeris::Glonass),
+        );
         let stores = [
             (System::Gps, gps),
             (System::Galileo, gal),
             (System::BeiDou, bds),
+            (System::Glonass, glo),
         ];
         for (lat, lon) in [
             (45.0f64, 7.0f64),
