@@ -1,5 +1,5 @@
 //! Issue 19 item 6: the multi-constellation simulator. A static receiver simulated
-//! with GPS, Galileo and BeiDou, read back from obs.rnx / nav.rnx: every pseudorange
+//! with GPS, GLONASS, Galileo and BeiDou, read back from obs.rnx / nav.rnx: every pseudorange
 //! minus its model from the broadcast records (geometric range with light time and
 //! Sagnac, the configured inter-system bias, the satellite clock with its group
 //! delay, Klobuchar scaled to the signal's frequency, Saastamoinen) is below 1 mm
@@ -32,7 +32,7 @@ fn scenario(errors: &str) -> String {
         "seed = 7\ndescription = \"static, G+E+C\"\n\n[start]\ngps_week = 2381\n\
          time_s = 345600.0\nposition_deg_m = [{LAT}, {LON}, {H}]\nheading_deg = 0\n\n\
          [imu]\ngrade = \"adis16405\"\nrate_hz = 10\n\n[gnss]\nrate_hz = 0.1\nraw = true\n\
-         systems = [\"G\", \"E\", \"C\"]\n\n[gnss.errors]\n{errors}\n\n\
+         systems = [\"G\", \"E\", \"C\", \"R\"]\n\n[gnss.errors]\n{errors}\n\n\
          [[segment]]\ntype = \"static\"\nduration_s = 1800\n"
     )
 }
@@ -46,7 +46,16 @@ fn residuals(sim: &Path, isb: &BTreeMap<System, f64>) -> BTreeMap<(i64, SatId), 
     let all = read_rinex_obs_all(&sim.join("obs.rnx")).unwrap();
     let epochs = all.epochs;
     let systems: Vec<System> = all.header.types.iter().map(|(s, _)| *s).collect();
-    assert_eq!(systems, [System::Gps, System::Galileo, System::BeiDou]);
+    assert_eq!(
+        systems,
+        [
+            System::Gps,
+            System::Glonass,
+            System::Galileo,
+            System::BeiDou
+        ]
+    );
+    assert_eq!(all.header.glonass_channels.len(), 24);
     let lla = Vector3::new(LAT.to_radians(), LON.to_radians(), H);
     let rx = lla_to_ecef(&lla);
     let mut out = BTreeMap::new();
@@ -61,7 +70,8 @@ fn residuals(sim: &Path, isb: &BTreeMap<System, f64>) -> BTreeMap<(i64, SatId), 
             let eph = store.select(s.sat, ep.t).expect("a record");
             let path = signal_path(eph, &rx, &Vector3::zeros(), ep.t);
             let (az, el) = az_el(&lla, &path.los_unit);
-            let f = carrier_frequency_hz(s.sat.system, code.band(), None).unwrap();
+            let channel = all.header.glonass_channel(s.sat.prn);
+            let f = carrier_frequency_hz(s.sat.system, code.band(), channel).unwrap();
             let scale = (1_575.42e6 / f).powi(2);
             let iono = scale * klobuchar_l1_delay_m(&alpha, &beta, lla.x, lla.y, az, el, ep.t.sow);
             let tropo = saastamoinen_slant_m(lla.x, lla.z, el);
@@ -89,7 +99,13 @@ fn simulate_with(dir: &Path, name: &str, errors: &str) -> PathBuf {
 fn mixed_pseudoranges_match_the_broadcast_models() {
     let dir = tmp("sim-multi");
     std::fs::create_dir_all(&dir).unwrap();
-    let isb: BTreeMap<System, f64> = [(System::Galileo, 2.5), (System::BeiDou, -5.0)].into();
+    // Galileo as configured, BeiDou and GLONASS the defaults.
+    let isb: BTreeMap<System, f64> = [
+        (System::Galileo, 2.5),
+        (System::BeiDou, -5.0),
+        (System::Glonass, 7.0),
+    ]
+    .into();
 
     // 1. Every error 0: the pseudoranges are the models to the file's 1 mm.
     let zero = "iono_m = 0\ntropo_m = 0\nsat_clock_m = 0\norbit_m = 0\nmultipath_m = 0\n\
@@ -103,7 +119,7 @@ fn mixed_pseudoranges_match_the_broadcast_models() {
         e.1 = e.1.max(r.abs());
     }
     eprintln!("errors off, per system (count, max |residual| m): {per_sys:?}");
-    assert_eq!(per_sys.len(), 3);
+    assert_eq!(per_sys.len(), 4);
     for (sys, (n, worst)) in &per_sys {
         assert!(*n > 181 * 4, "{sys:?}: {n} pseudoranges");
         assert!(*worst < 1e-3, "{sys:?}: residual {worst} m");
@@ -115,6 +131,8 @@ fn mixed_pseudoranges_match_the_broadcast_models() {
         "G    4 C1C L1C D1C S1C",
         "E    4 C1C L1C D1C S1C",
         "C    4 C2I L2I D2I S2I",
+        "R    4 C1C L1C D1C S1C",
+        " 24 R01  1 R02 -4 R03  5 R04  6 R05  1 R06 -4 R07  5 R08  6 GLONASS SLOT / FRQ #",
     ] {
         assert!(obs.contains(l), "{l}");
     }
@@ -173,7 +191,7 @@ fn bad_system_letters_and_satellite_names_are_refused_naming_the_key() {
     ];
     for (k, (gnss, errors, key)) in cases.iter().enumerate() {
         let text = scenario(errors).replace(
-            "systems = [\"G\", \"E\", \"C\"]\n",
+            "systems = [\"G\", \"E\", \"C\", \"R\"]\n",
             if gnss.starts_with("systems") {
                 gnss
             } else {

@@ -10,7 +10,8 @@
 //! records when the header has none. Numbers may use `D` or `E` exponents. RINEX
 //! 4.01 and later are refused (they add messages this reader does not know).
 //! Writes RINEX 3.04 GPS navigation files (fixed-width D19.12 fields), mixed
-//! (`M: MIXED`) when Galileo or BeiDou records are given (Tables A8, A14).
+//! (`M: MIXED`) when Galileo, BeiDou or GLONASS records are given (Tables A8, A14,
+//! A10).
 
 use crate::error::InputError;
 use crate::fmt::LineReader;
@@ -899,7 +900,7 @@ pub fn write_rinex3_nav_dated(
     program: &str,
     date: &str,
 ) -> io::Result<()> {
-    let mixed = !(nav.galileo.is_empty() && nav.beidou.is_empty());
+    let mixed = !(nav.galileo.is_empty() && nav.beidou.is_empty() && nav.glonass.is_empty());
     header(
         w,
         &format!(
@@ -998,6 +999,20 @@ pub fn write_rinex3_nav_dated(
             &[e.orbit.idot_rad_per_s, 0.0, f64::from(e.toe.week), 0.0],
             &[e.sv_accuracy_m, f64::from(e.sat_h1), e.tgd1_s, e.tgd2_s],
             &[tt, f64::from(e.aodc)],
+        ];
+        write_orbit_lines(w, &rows)?;
+    }
+    // GLONASS (RINEX 3.04 Table A10, 3 orbit lines): the epoch is UTC = GPST - the
+    // header's LEAP SECONDS (18 when absent); km, km/s, km/s^2.
+    let leap = f64::from(nav.leap_seconds.unwrap_or(18));
+    for e in &nav.glonass {
+        let clock = [-e.tau_n_s, e.gamma_n, e.frame_time_s];
+        write_first_line(w, 'R', e.slot, e.tb.add_s(-leap), clock)?;
+        let (p, v, a) = (e.pos_m * 1e-3, e.vel_mps * 1e-3, e.acc_mps2 * 1e-3);
+        let rows: [&[f64]; 3] = [
+            &[p.x, v.x, a.x, f64::from(e.health)],
+            &[p.y, v.y, a.y, f64::from(e.freq_channel)],
+            &[p.z, v.z, a.z, e.age_days],
         ];
         write_orbit_lines(w, &rows)?;
     }

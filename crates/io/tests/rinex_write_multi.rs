@@ -5,7 +5,9 @@
 //! digits).
 
 use nalgebra::Vector3;
-use navfuse_gnss::constellation::{nominal_beidou27, nominal_galileo24, nominal_gps24};
+use navfuse_gnss::constellation::{
+    glonass_records, nominal_beidou27, nominal_galileo24, nominal_gps24,
+};
 use navfuse_gnss::ephemeris::kepler::KeplerOrbit;
 use navfuse_gnss::ephemeris::Ephemeris;
 use navfuse_gnss::obs::{MultiObsEpoch, ObsValue, SatSignals};
@@ -153,10 +155,15 @@ fn mixed_navigation_round_trip() {
         e.aode = k as u16;
         e.aodc = 200 - k as u16;
     }
+    let mut glo = glonass_records(t, t.add_s(3_600.0), 18.0);
+    for (k, e) in glo.iter_mut().enumerate() {
+        e.acc_mps2 = Vector3::new(1.5e-6, -2.25e-6, 3.0e-7 * k as f64);
+    }
     let nav = RinexNav {
         gps: nominal_gps24(t),
         galileo: gal.clone(),
         beidou: bds.clone(),
+        glonass: glo.clone(),
         iono_alpha: Some([1.1176e-8, 7.4506e-9, -5.9605e-8, -5.9605e-8]),
         iono_beta: Some([9.0112e4, 3.2768e4, -1.9661e5, -6.5536e4]),
         leap_seconds: Some(18),
@@ -252,17 +259,48 @@ fn mixed_navigation_round_trip() {
             assert!(close(x, y), "C{:02}: {x} {y}", a.prn);
         }
     }
-    // The states agree to well below a millimetre.
-    let store = back.store();
-    let mut worst = 0.0f64;
-    for e in gal
+    assert_eq!(back.glonass.len(), glo.len());
+    for (a, b) in glo.iter().zip(&back.glonass) {
+        assert_eq!(
+            (a.slot, a.tb, a.health, a.freq_channel),
+            (b.slot, b.tb, b.health, b.freq_channel)
+        );
+        assert_eq!(a.tb_utc_sod_s, b.tb_utc_sod_s);
+        for (x, y) in [
+            (a.tau_n_s, b.tau_n_s),
+            (a.gamma_n, b.gamma_n),
+            (a.frame_time_s, b.frame_time_s),
+            (a.age_days, b.age_days),
+        ] {
+            assert!(close(x, y), "R{:02}: {x} {y}", a.slot);
+        }
+        for (x, y) in [
+            (a.pos_m, b.pos_m),
+            (a.vel_mps, b.vel_mps),
+            (a.acc_mps2, b.acc_mps2),
+        ] {
+            for i in 0..3 {
+                assert!(close(x[i], y[i]), "R{:02}: {x} {y}", a.slot);
+            }
+        }
+    }
+    // Each record read back gives the state of the one written, 10 min after toe,
+    // to well below a millimetre.
+    let written = gal
         .iter()
         .map(|e| Ephemeris::Galileo(e.clone()))
         .chain(bds.iter().map(|e| Ephemeris::BeiDou(e.clone())))
-    {
-        let tt = t.add_s(1_234.0);
-        let b = store.select(e.sat(), tt).unwrap();
-        let (sa, sb) = (e.sat_state(tt), b.sat_state(tt));
+        .chain(glo.iter().map(|e| Ephemeris::Glonass(e.clone())));
+    let read = back
+        .galileo
+        .iter()
+        .map(|e| Ephemeris::Galileo(e.clone()))
+        .chain(back.beidou.iter().map(|e| Ephemeris::BeiDou(e.clone())))
+        .chain(back.glonass.iter().map(|e| Ephemeris::Glonass(e.clone())));
+    let mut worst = 0.0f64;
+    for (a, b) in written.zip(read) {
+        let tt = a.toe_gpst().add_s(600.0);
+        let (sa, sb) = (a.sat_state(tt), b.sat_state(tt));
         worst = worst.max((sa.pos_ecef_m - sb.pos_ecef_m).norm());
         worst = worst.max(299_792_458.0 * (sa.clock_bias_s - sb.clock_bias_s).abs());
     }

@@ -11,8 +11,8 @@ use nalgebra::{UnitQuaternion, Vector3};
 use navfuse_core::sat::System;
 use navfuse_core::types::{ImuErrors, NavState};
 use navfuse_gnss::constellation::{
-    beidou_toe_near, galileo_toe_near, nominal_beidou27, nominal_galileo24, nominal_gps24,
-    reissued, reissued_beidou, reissued_galileo, seed000_table3,
+    beidou_toe_near, galileo_toe_near, glonass_records, nominal_beidou27, nominal_galileo24,
+    nominal_gps24, reissued, reissued_beidou, reissued_galileo, seed000_table3,
 };
 use navfuse_gnss::ephemeris::GpsEphemeris;
 use navfuse_gnss::obs::{MultiObsEpoch, ObsValue, SatSignals};
@@ -86,6 +86,10 @@ impl Out {
     }
 }
 
+/// GPS - UTC \[s\] written to nav.rnx (`LEAP SECONDS`) and used for the GLONASS
+/// records' UTC epochs.
+const NAV_LEAP_SECONDS: i32 = 18;
+
 /// The obs.rnx writer: GPS-only RINEX 3.04, or mixed RINEX 3.05.
 enum ObsOut {
     Gps(RinexObsWriter<BufWriter<File>>),
@@ -113,12 +117,12 @@ fn constellation(sc: &Scenario) -> Result<RinexNav, InputError> {
     let end = start.add_s(sc.trajectory.duration());
     let e = &g.errors;
     let ura_m = (e.orbit_m.powi(2) + e.sat_clock_m.powi(2) + e.sa_m.powi(2)).sqrt();
-    let (mut galileo, mut beidou) = if g.constellation == "rinex" {
+    let (mut galileo, mut beidou, mut glonass) = if g.constellation == "rinex" {
         let p = sc
             .base_dir()
             .join(g.rinex_nav.as_deref().unwrap_or_default());
         let nav = read_rinex_nav(&p)?;
-        (nav.galileo, nav.beidou)
+        (nav.galileo, nav.beidou, nav.glonass)
     } else {
         let mut gal = reissued_galileo(
             &nominal_galileo24(galileo_toe_near(start)),
@@ -134,7 +138,9 @@ fn constellation(sc: &Scenario) -> Result<RinexNav, InputError> {
             3_600.0,
         );
         bds.iter_mut().for_each(|e| e.sv_accuracy_m = ura_m);
-        (gal, bds)
+        // GPS - UTC as written to nav.rnx's LEAP SECONDS.
+        let glo = glonass_records(start, end, f64::from(NAV_LEAP_SECONDS));
+        (gal, bds, glo)
     };
     if !systems.contains(&System::Gps) {
         gps.clear();
@@ -145,10 +151,14 @@ fn constellation(sc: &Scenario) -> Result<RinexNav, InputError> {
     if !systems.contains(&System::BeiDou) {
         beidou.clear();
     }
+    if !systems.contains(&System::Glonass) {
+        glonass.clear();
+    }
     Ok(RinexNav {
         gps,
         galileo,
         beidou,
+        glonass,
         iono_alpha: iono.map(|i| i.0),
         iono_beta: iono.map(|i| i.1),
         ..RinexNav::default()
@@ -156,7 +166,7 @@ fn constellation(sc: &Scenario) -> Result<RinexNav, InputError> {
 }
 
 /// The signals written for each system: code, phase, Doppler, strength of GPS L1
-/// C/A, Galileo E1 (C1C...) and BeiDou B1I (C2I...).
+/// C/A, Galileo E1, GLONASS L1OF (C1C...) and BeiDou B1I (C2I...).
 fn obs_types(system: System) -> Vec<ObsCode> {
     let names: [&[u8; 3]; 4] = match system {
         System::BeiDou => [b"C2I", b"L2I", b"D2I", b"S2I"],
@@ -353,9 +363,10 @@ pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError>
                 gps: cons.gps.clone(),
                 galileo: cons.galileo.clone(),
                 beidou: cons.beidou.clone(),
+                glonass: cons.glonass.clone(),
                 iono_alpha: Some(alpha),
                 iono_beta: Some(beta),
-                leap_seconds: Some(18),
+                leap_seconds: Some(NAV_LEAP_SECONDS),
                 skipped_records: 0,
                 warnings: Vec::new(),
                 ..RinexNav::default()
@@ -389,7 +400,16 @@ pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError>
                 ObsOut::Gps(RinexObsWriter::new(bw, &hdr).map_err(io_err(&p))?)
             } else {
                 let types: Vec<_> = systems.iter().map(|s| (*s, obs_types(*s))).collect();
-                ObsOut::Multi(RinexMultiObsWriter::new(bw, &hdr, &types, &[]).map_err(io_err(&p))?)
+                let mut channels: Vec<(u8, i8)> = cons
+                    .glonass
+                    .iter()
+                    .map(|e| (e.slot, e.freq_channel))
+                    .collect();
+                channels.sort_unstable();
+                channels.dedup();
+                ObsOut::Multi(
+                    RinexMultiObsWriter::new(bw, &hdr, &types, &channels).map_err(io_err(&p))?,
+                )
             };
             obs_w = Some((w, p));
             files.push("obs.rnx".into());

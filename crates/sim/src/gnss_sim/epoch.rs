@@ -128,7 +128,8 @@ impl GnssSim {
             if lost {
                 continue;
             }
-            paths.push((sat, (eph.group_delay_s(), eph.iod()), path, az, el));
+            let f_hz = sim_carrier_hz(eph);
+            paths.push((sat, (eph.group_delay_s(), eph.iod(), f_hz), path, az, el));
         }
         // Blockage by count: keep the highest satellites.
         if let Some(keep) = self.blockage_keep(rel) {
@@ -148,14 +149,13 @@ impl GnssSim {
             }
             p.tracked = now;
         }
-        for (sat, (tgd_s, iode), path, az, el) in paths {
+        for (sat, (tgd_s, iode, f_hz), path, az, el) in paths {
             let Some(p) = self.procs.get_mut(&sat) else {
                 continue;
             };
             let prn = sat.prn;
             // The system's signal: wavelength, ionosphere scaling (f_L1/f)^2 of the
             // L1-referred delays, receiver inter-system bias.
-            let f_hz = sim_carrier_hz(sat.system);
             let wavelength_m = SPEED_OF_LIGHT_MPS / f_hz;
             let iono_scale = (L1_HZ / f_hz).powi(2);
             let isb_m = e.isb_of(sat.system);

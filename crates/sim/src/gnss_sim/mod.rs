@@ -17,7 +17,7 @@ use std::collections::{BTreeMap, VecDeque};
 use nalgebra::Vector3;
 use navfuse_core::earth::{c_ne, ecef_to_lla, lla_to_ecef};
 use navfuse_core::sat::{SatId, System};
-use navfuse_gnss::ephemeris::SPEED_OF_LIGHT_MPS;
+use navfuse_gnss::ephemeris::{Ephemeris, SPEED_OF_LIGHT_MPS};
 use navfuse_gnss::ephemeris_store::EphemerisStore;
 use navfuse_gnss::signal::carrier_frequency_hz;
 use navfuse_io::rinex_obs::SatObs;
@@ -39,11 +39,17 @@ pub use spec::{
 pub const L1_HZ: f64 = 1_575.42e6;
 pub const L1_WAVELENGTH_M: f64 = SPEED_OF_LIGHT_MPS / L1_HZ;
 
-/// The carrier frequency \[Hz\] of the signal simulated for `system`: GPS L1 C/A,
-/// Galileo E1 (1575.42 MHz), BeiDou B1I (1561.098 MHz), QZSS L1.
-pub fn sim_carrier_hz(system: System) -> f64 {
-    let band = if system == System::BeiDou { 2 } else { 1 };
-    carrier_frequency_hz(system, band, None).unwrap_or(L1_HZ)
+/// The carrier frequency \[Hz\] of the signal simulated for the satellite of `eph`:
+/// GPS L1 C/A, Galileo E1 (1575.42 MHz), BeiDou B1I (1561.098 MHz), GLONASS L1OF on
+/// the record's channel (1602 + 0.5625 k MHz), QZSS L1.
+pub fn sim_carrier_hz(eph: &Ephemeris) -> f64 {
+    let system = eph.sat().system;
+    let (band, channel) = match eph {
+        Ephemeris::BeiDou(_) => (2, None),
+        Ephemeris::Glonass(g) => (1, Some(g.freq_channel)),
+        _ => (1, None),
+    };
+    carrier_frequency_hz(system, band, channel).unwrap_or(L1_HZ)
 }
 
 /// Ionosphere single-layer height [m] and mean Earth radius [m] for the obliquity.

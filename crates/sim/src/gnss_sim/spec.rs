@@ -23,7 +23,7 @@ pub struct GnssSpec {
     pub constellation: String,
     /// RINEX navigation file (relative to the scenario file) for `constellation = "rinex"`.
     pub rinex_nav: Option<String>,
-    /// Systems simulated, by RINEX letter: "G" GPS, "E" Galileo, "C" BeiDou (default
+    /// Systems simulated, by RINEX letter: "G" GPS, "E" Galileo, "C" BeiDou, "R" GLONASS (default
     /// ["G"]). Non-GPS satellites come from the bundled constellations
     /// (navfuse_gnss::constellation), or from `rinex_nav` with `constellation = "rinex"`.
     #[serde(default = "gps_only")]
@@ -121,7 +121,7 @@ pub struct ErrorBudget {
     #[serde(default = "yes")]
     pub model_delays: bool,
     /// Receiver inter-system bias of each non-GPS system against GPS \[m\], by letter
-    /// (`isb_m = { E = 3.0, C = -5.0 }`): added to that system's code and phase
+    /// (`isb_m = { E = 3.0, C = -5.0, R = 7.0 }`): added to that system's code and phase
     /// ranges. Systems not given use [`default_isb_m`]; GPS is the reference (0).
     #[serde(default)]
     pub isb_m: BTreeMap<String, f64>,
@@ -434,24 +434,26 @@ impl GnssSpec {
         if self.systems.is_empty() {
             return bad(
                 "systems",
-                "expected at least one of \"G\", \"E\", \"C\"".into(),
+                "expected at least one of \"G\", \"E\", \"C\", \"R\"".into(),
             );
         }
         for sys in &self.systems {
-            if !matches!(sys.as_str(), "G" | "E" | "C") {
+            if !matches!(sys.as_str(), "G" | "E" | "C" | "R") {
                 return bad(
                     "systems",
                     format!(
-                        "expected \"G\" (GPS), \"E\" (Galileo) or \"C\" (BeiDou), got \"{sys}\""
+                        "expected \"G\" (GPS), \"E\" (Galileo), \"C\" (BeiDou) or \"R\" (GLONASS), got \"{sys}\""
                     ),
                 );
             }
         }
         for (k, v) in &self.errors.isb_m {
-            if !matches!(k.as_str(), "E" | "C") {
+            if !matches!(k.as_str(), "E" | "C" | "R") {
                 return bad(
                     "errors.isb_m",
-                    format!("expected keys \"E\" or \"C\" (GPS is the reference), got \"{k}\""),
+                    format!(
+                        "expected keys \"E\", \"C\" or \"R\" (GPS is the reference), got \"{k}\""
+                    ),
                 );
             }
             if !v.is_finite() {
