@@ -641,8 +641,8 @@ fn reissue_records<E: KeplerRecord>(
 
 /// Galileo records re-issued every `step_s` to cover `[from, until]` (GPST), as
 /// [`reissued`] does for GPS: the same orbit and clock at a later toe = toc, IODnav
-/// + 1 per issue (mod 1024), transmitted 10 min before toe. (Galileo refreshes its
-/// batches every 10 min, each valid 4 h: `GALILEO_MAX_AGE_S`.)
+/// plus 1 per issue (mod 1024), transmitted 10 min before toe. (Galileo refreshes
+/// its batches every 10 min, each valid 4 h: `GALILEO_MAX_AGE_S`.)
 pub fn reissued_galileo(
     ephs: &[GalileoEphemeris],
     from: GpsTime,
