@@ -106,9 +106,10 @@ fn io_err(path: &Path) -> impl Fn(std::io::Error) -> InputError + '_ {
 }
 
 /// The constellation of every system a scenario asks for: GPS as
-/// [`gps_constellation`]; Galileo and BeiDou the bundled ones (re-issued hourly, SISA /
-/// URA the simulated signal-in-space error), or those of `rinex_nav` with
-/// `constellation = "rinex"`.
+/// [`gps_constellation`]; Galileo, BeiDou and GLONASS the bundled ones (Galileo and
+/// BeiDou re-issued hourly with SISA / URA the simulated signal-in-space error,
+/// GLONASS every 30 min), or those of `rinex_nav` with `constellation = "rinex"`.
+/// Only the systems simulated are built or kept.
 fn constellation(sc: &Scenario) -> Result<RinexNav, InputError> {
     let g = sc.file.gnss.as_ref().expect("called with [gnss]");
     let systems = systems_of(g);
@@ -117,52 +118,51 @@ fn constellation(sc: &Scenario) -> Result<RinexNav, InputError> {
     let end = start.add_s(sc.trajectory.duration());
     let e = &g.errors;
     let ura_m = (e.orbit_m.powi(2) + e.sat_clock_m.powi(2) + e.sa_m.powi(2)).sqrt();
-    let (mut galileo, mut beidou, mut glonass) = if g.constellation == "rinex" {
-        let p = sc
-            .base_dir()
-            .join(g.rinex_nav.as_deref().unwrap_or_default());
-        let nav = read_rinex_nav(&p)?;
-        (nav.galileo, nav.beidou, nav.glonass)
-    } else {
-        let mut gal = reissued_galileo(
-            &nominal_galileo24(galileo_toe_near(start)),
-            start,
-            end,
-            3_600.0,
-        );
-        gal.iter_mut().for_each(|e| e.sisa_m = ura_m);
-        let mut bds = reissued_beidou(
-            &nominal_beidou27(beidou_toe_near(start)),
-            start,
-            end,
-            3_600.0,
-        );
-        bds.iter_mut().for_each(|e| e.sv_accuracy_m = ura_m);
-        // GPS - UTC as written to nav.rnx's LEAP SECONDS.
-        let glo = glonass_records(start, end, f64::from(NAV_LEAP_SECONDS));
-        (gal, bds, glo)
-    };
-    if !systems.contains(&System::Gps) {
+    let has = |s: System| systems.contains(&s);
+    if !has(System::Gps) {
         gps.clear();
     }
-    if !systems.contains(&System::Galileo) {
-        galileo.clear();
-    }
-    if !systems.contains(&System::BeiDou) {
-        beidou.clear();
-    }
-    if !systems.contains(&System::Glonass) {
-        glonass.clear();
-    }
-    Ok(RinexNav {
+    let mut nav = RinexNav {
         gps,
-        galileo,
-        beidou,
-        glonass,
         iono_alpha: iono.map(|i| i.0),
         iono_beta: iono.map(|i| i.1),
         ..RinexNav::default()
-    })
+    };
+    if systems == [System::Gps] {
+        return Ok(nav);
+    }
+    if g.constellation == "rinex" {
+        let p = sc
+            .base_dir()
+            .join(g.rinex_nav.as_deref().unwrap_or_default());
+        let file = read_rinex_nav(&p)?;
+        (nav.galileo, nav.beidou, nav.glonass) = (file.galileo, file.beidou, file.glonass);
+    } else {
+        if has(System::Galileo) {
+            let gal = nominal_galileo24(galileo_toe_near(start));
+            nav.galileo = reissued_galileo(&gal, start, end, 3_600.0);
+            nav.galileo.iter_mut().for_each(|e| e.sisa_m = ura_m);
+        }
+        if has(System::BeiDou) {
+            let bds = nominal_beidou27(beidou_toe_near(start));
+            nav.beidou = reissued_beidou(&bds, start, end, 3_600.0);
+            nav.beidou.iter_mut().for_each(|e| e.sv_accuracy_m = ura_m);
+        }
+        if has(System::Glonass) {
+            // GPS - UTC as written to nav.rnx's LEAP SECONDS.
+            nav.glonass = glonass_records(start, end, f64::from(NAV_LEAP_SECONDS));
+        }
+    }
+    if !has(System::Galileo) {
+        nav.galileo.clear();
+    }
+    if !has(System::BeiDou) {
+        nav.beidou.clear();
+    }
+    if !has(System::Glonass) {
+        nav.glonass.clear();
+    }
+    Ok(nav)
 }
 
 /// The signals written for each system: code, phase, Doppler, strength of GPS L1
