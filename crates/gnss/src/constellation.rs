@@ -199,29 +199,34 @@ mod tests {
         assert!((c[4].omega0_rad - c[0].omega0_rad - 60f64.to_radians()).abs() < 1e-12);
     }
 
+    /// The mid-latitude sites (lat, lon deg) of the visibility tests.
+    pub(super) const SITES: [(f64, f64); 4] =
+        [(45.0, 7.0), (35.0, 139.0), (-33.9, 151.2), (40.0, -105.0)];
+
+    /// How many of `recs` are above 10 deg at `lla` at t.
+    pub(super) fn above_10_deg<E: crate::geometry::StateAt>(
+        recs: impl Iterator<Item = E>,
+        lla: &Vector3<f64>,
+        t: GpsTime,
+    ) -> usize {
+        let rx = lla_to_ecef(lla);
+        recs.filter(|e| {
+            let sp = signal_path(e, &rx, &Vector3::zeros(), t);
+            az_el(lla, &sp.los_unit).1 > 10f64.to_radians()
+        })
+        .count()
+    }
+
     #[test]
     fn nominal_constellation_always_gives_four_above_10_deg() {
         let toe = GpsTime::new(2381, 345_600.0);
         let c = nominal_gps24(toe);
-        for (lat, lon) in [
-            (45.0f64, 7.0f64),
-            (35.0, 139.0),
-            (-33.9, 151.2),
-            (40.0, -105.0),
-        ] {
+        for (lat, lon) in SITES {
             let lla = Vector3::new(lat.to_radians(), lon.to_radians(), 100.0);
-            let rx = lla_to_ecef(&lla);
             let mut min_visible = usize::MAX;
             for step in 0..=(24 * 12) {
                 let t = toe.add_s(-43_200.0 + f64::from(step) * 300.0);
-                let n = c
-                    .iter()
-                    .filter(|e| {
-                        let sp = signal_path(e, &rx, &Vector3::zeros(), t);
-                        az_el(&lla, &sp.los_unit).1 > 10f64.to_radians()
-                    })
-                    .count();
-                min_visible = min_visible.min(n);
+                min_visible = min_visible.min(above_10_deg(c.iter(), &lla, t));
             }
             assert!(
                 min_visible >= 4,
@@ -798,9 +803,9 @@ mod multi_tests {
     use crate::ephemeris::beidou::bdt_to_gpst;
     use crate::ephemeris::Ephemeris;
     use crate::ephemeris_store::EphemerisStore;
-    use crate::geometry::{az_el, signal_path};
+
     use nalgebra::Vector3;
-    use navfuse_core::earth::lla_to_ecef;
+
     use navfuse_core::sat::System;
 
     /// Radius, speed and period of each record over a day; the period from the
@@ -961,27 +966,17 @@ mod multi_tests {
             (System::BeiDou, bds),
             (System::Glonass, glo),
         ];
-        for (lat, lon) in [
-            (45.0f64, 7.0f64),
-            (35.0, 139.0),
-            (-33.9, 151.2),
-            (40.0, -105.0),
-        ] {
+        for (lat, lon) in super::tests::SITES {
             let lla = Vector3::new(lat.to_radians(), lon.to_radians(), 100.0);
-            let rx = lla_to_ecef(&lla);
             for (sys, store) in &stores {
                 let (mut min, mut sum) = (usize::MAX, 0usize);
                 for step in 0..=(24 * 12) {
                     let t = t0.add_s(f64::from(step) * 300.0);
-                    let n = store
+                    let recs = store
                         .sats()
                         .into_iter()
-                        .filter(|s| {
-                            let e = store.select(*s, t).expect("record");
-                            let sp = signal_path(e, &rx, &Vector3::zeros(), t);
-                            az_el(&lla, &sp.los_unit).1 > 10f64.to_radians()
-                        })
-                        .count();
+                        .map(|s| store.select(s, t).expect("record"));
+                    let n = super::tests::above_10_deg(recs, &lla, t);
                     min = min.min(n);
                     sum += n;
                 }
