@@ -803,9 +803,7 @@ mod multi_tests {
     use crate::ephemeris::beidou::bdt_to_gpst;
     use crate::ephemeris::Ephemeris;
     use crate::ephemeris_store::EphemerisStore;
-
     use nalgebra::Vector3;
-
     use navfuse_core::sat::System;
 
     /// Radius, speed and period of each record over a day; the period from the
