@@ -216,3 +216,41 @@ fn bad_system_letters_and_satellite_names_are_refused_naming_the_key() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn the_isb_random_walk_is_common_to_a_systems_satellites_and_spares_gps() {
+    let dir = tmp("sim-multi-walk");
+    std::fs::create_dir_all(&dir).unwrap();
+    let zero = "iono_m = 0\ntropo_m = 0\nsat_clock_m = 0\norbit_m = 0\nmultipath_m = 0\n\
+                noise_m = 0\nrx_clock_m = 0\nsa_m = 0\nisb_walk_m_per_sqrth = 10.0";
+    let sim = simulate_with(&dir, "walk", zero);
+    let isb: BTreeMap<System, f64> = [
+        (System::Galileo, 3.0),
+        (System::BeiDou, -5.0),
+        (System::Glonass, 7.0),
+    ]
+    .into();
+    let res = residuals(&sim, &isb);
+    // Per epoch and system: one value (the walk), spread < 1 mm; GPS 0.
+    let mut by: BTreeMap<(i64, System), (f64, f64)> = BTreeMap::new();
+    for ((t, sat), r) in &res {
+        let e = by.entry((*t, sat.system)).or_insert((f64::MAX, f64::MIN));
+        e.0 = e.0.min(*r);
+        e.1 = e.1.max(*r);
+    }
+    let mut last: BTreeMap<System, f64> = BTreeMap::new();
+    for ((_, sys), (lo, hi)) in &by {
+        assert!(hi - lo < 1e-3, "{sys:?}: spread {}", hi - lo);
+        if *sys == System::Gps {
+            assert!(hi.abs() < 1e-3);
+        }
+        last.insert(*sys, 0.5 * (lo + hi));
+    }
+    eprintln!("ISB walk after 30 min [m]: {last:?}");
+    for sys in [System::Galileo, System::BeiDou, System::Glonass] {
+        // 10 m/sqrt(h) over 0.5 h: sigma 7.1 m; a walk that moved at all, not wildly.
+        let w = last[&sys];
+        assert!(w.abs() > 1e-3 && w.abs() < 40.0, "{sys:?}: {w}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

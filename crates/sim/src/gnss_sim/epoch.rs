@@ -29,6 +29,10 @@ impl GnssSim {
             self.tropo_common.step(dt, &mut self.rng_tropo);
             self.tropo_diff.step(dt, &mut self.rng_tropo);
             self.rx_clock.step(dt, &mut self.rng_rx);
+            let q = e.isb_walk_m_per_sqrth * (dt / 3_600.0).sqrt();
+            for (v, rng) in self.isb_walk.values_mut() {
+                *v += q * rng.normal();
+            }
             for p in self.procs.values_mut() {
                 let r = &mut p.rng;
                 p.iono_common.step(dt, r);
@@ -158,7 +162,7 @@ impl GnssSim {
             // L1-referred delays, receiver inter-system bias.
             let wavelength_m = SPEED_OF_LIGHT_MPS / f_hz;
             let iono_scale = (L1_HZ / f_hz).powi(2);
-            let isb_m = e.isb_of(sat.system);
+            let isb_m = e.isb_of(sat.system) + self.isb_walk.get(&sat.system).map_or(0.0, |w| w.0);
             for ev in &self.spec.events {
                 if let EventSpec::CycleSlip {
                     prn: sp,

@@ -183,6 +183,9 @@ pub struct GnssSim {
     rx_clock: SmoothGm,
     rng_tropo: Stream,
     rng_rx: Stream,
+    /// Random-walk part of each non-GPS system's ISB \[m\] and its stream (empty when
+    /// `isb_walk_m_per_sqrth` is 0).
+    isb_walk: BTreeMap<System, (f64, Stream)>,
     fix_err: [GaussMarkov; 3],
     rng_fix: Stream,
     rng_heading: Stream,
@@ -258,6 +261,21 @@ impl GnssSim {
         }
         let mut rng_tropo = Stream::new(seed, "gnss.tropo");
         let mut rng_rx = Stream::new(seed, "gnss.rx_clock");
+        let isb_walk = if e.isb_walk_m_per_sqrth > 0.0 {
+            let mut v: Vec<System> = ephs.sats().iter().map(|s| s.system).collect();
+            v.dedup();
+            v.into_iter()
+                .filter(|s| *s != System::Gps)
+                .map(|s| {
+                    (
+                        s,
+                        (0.0, Stream::new(seed, &format!("gnss.isb.{}", s.letter()))),
+                    )
+                })
+                .collect()
+        } else {
+            BTreeMap::new()
+        };
         let mut rng_fix = Stream::new(seed, "gnss.fix");
         let (fh, fv, ftau) = match &spec.fix {
             Some(f) => (
@@ -295,6 +313,7 @@ impl GnssSim {
             rx_clock: SmoothGm::new(e.rx_clock_m, e.rx_clock_tau_s, &mut rng_rx),
             rng_tropo,
             rng_rx,
+            isb_walk,
             fix_err: [
                 GaussMarkov::new(fh, ftau, &mut rng_fix),
                 GaussMarkov::new(fh, ftau, &mut rng_fix),

@@ -125,6 +125,11 @@ pub struct ErrorBudget {
     /// ranges. Systems not given use [`default_isb_m`]; GPS is the reference (0).
     #[serde(default)]
     pub isb_m: BTreeMap<String, f64>,
+    /// Random walk of each non-GPS system's ISB around `isb_m` [m/sqrt(h)]: 0 = constant
+    /// (the default). One walk per system (random stream `gnss.isb.E`, ...); not in the
+    /// Doppler (a walk has no rate).
+    #[serde(default)]
+    pub isb_walk_m_per_sqrth: f64,
 }
 
 /// Default receiver inter-system bias \[m\] of `system` against GPS: Galileo +3.0 m,
@@ -479,6 +484,7 @@ impl GnssSpec {
             ("errors.phase_noise_m", e.phase_noise_m),
             ("errors.phase_multipath_m", e.phase_multipath_m),
             ("errors.doppler_noise_mps", e.doppler_noise_mps),
+            ("errors.isb_walk_m_per_sqrth", e.isb_walk_m_per_sqrth),
         ];
         for (k, v) in sig {
             if !(v.is_finite() && v >= 0.0) {
