@@ -9,11 +9,14 @@
 //! CORR GPSA/GPSB, QZSA/QZSB, BDSA/BDSB, GAL (v3), LEAP SECONDS; RINEX 4 `> ION`
 //! records when the header has none. Numbers may use `D` or `E` exponents. RINEX
 //! 4.01 and later are refused (they add messages this reader does not know).
-//! Writes RINEX 3.04 GPS navigation files (fixed-width D19.12 fields).
+//! Writes RINEX 3.04 GPS navigation files (fixed-width D19.12 fields), mixed
+//! (`M: MIXED`) when Galileo, BeiDou or GLONASS records are given (Tables A8, A14,
+//! A10).
 
 use crate::error::InputError;
 use crate::fmt::LineReader;
 use crate::rinex_nav_gnss as other;
+use navfuse_gnss::ephemeris::beidou::BDT_WEEK0_IN_GPS_WEEKS;
 use navfuse_gnss::ephemeris::kepler::KeplerOrbit;
 use navfuse_gnss::ephemeris::Ephemeris;
 use navfuse_gnss::time::{GpstCalendar, HALF_WEEK_S, SECONDS_PER_WEEK};
@@ -897,11 +900,15 @@ pub fn write_rinex3_nav_dated(
     program: &str,
     date: &str,
 ) -> io::Result<()> {
+    let mixed = !(nav.galileo.is_empty() && nav.beidou.is_empty() && nav.glonass.is_empty());
     header(
         w,
         &format!(
             "{:9.2}{:11}{:<20}{:<20}",
-            3.04, "", "N: GNSS NAV DATA", "G: GPS"
+            3.04,
+            "",
+            "N: GNSS NAV DATA",
+            if mixed { "M: MIXED" } else { "G: GPS" }
         ),
         "RINEX VERSION / TYPE",
     )?;
@@ -925,57 +932,146 @@ pub fn write_rinex3_nav_dated(
     }
     header(w, "", "END OF HEADER")?;
     for e in &nav.gps {
-        let c = e.toc.to_calendar();
-        let sec = c.second.round() as u32;
-        write!(
-            w,
-            "G{:02} {:04} {:02} {:02} {:02} {:02} {:02}",
-            e.prn,
-            c.year,
-            c.month,
-            c.day,
-            c.hour,
-            c.minute,
-            sec.min(59)
-        )?;
-        writeln!(
-            w,
-            "{}{}{}",
-            d19(e.af0_s)?,
-            d19(e.af1_s_per_s)?,
-            d19(e.af2_s_per_s2)?
-        )?;
-        let tt = match e.transmission_time {
-            Some(t) => t.diff_s(&GpsTime::new(e.toe.week, 0.0)),
-            None => TT_UNKNOWN,
-        };
-        let rows: [[f64; 4]; 7] = [
-            [f64::from(e.iode), e.crs_m, e.delta_n_rad_per_s, e.m0_rad],
-            [e.cuc_rad, e.e, e.cus_rad, e.sqrt_a_sqrt_m],
-            [e.toe.sow, e.cic_rad, e.omega0_rad, e.cis_rad],
-            [e.i0_rad, e.crc_m, e.omega_rad, e.omega_dot_rad_per_s],
-            [
+        let af = [e.af0_s, e.af1_s_per_s, e.af2_s_per_s2];
+        write_first_line(w, 'G', e.prn, e.toc, af)?;
+        let tt = tt_of_week(e.transmission_time, e.toe.week);
+        let k = kepler_rows(f64::from(e.iode), &e.orbit(), e.toe.sow);
+        let rows: [&[f64]; 7] = [
+            &k[0],
+            &k[1],
+            &k[2],
+            &k[3],
+            &[
                 e.idot_rad_per_s,
                 e.codes_l2,
                 f64::from(e.toe.week),
                 e.l2p_flag,
             ],
-            [
+            &[
                 e.sv_accuracy_m,
                 f64::from(e.health),
                 e.tgd_s,
                 f64::from(e.iodc),
             ],
-            [tt, e.fit_interval_h, 0.0, 0.0],
+            &[tt, e.fit_interval_h],
         ];
-        for (k, row) in rows.iter().enumerate() {
-            let n = if k == 6 { 2 } else { 4 };
-            let mut s = String::from("    ");
-            for v in row.iter().take(n) {
-                s.push_str(&d19(*v)?);
-            }
-            writeln!(w, "{s}")?;
+        write_orbit_lines(w, &rows)?;
+    }
+    // Galileo (RINEX 3.04 Table A8): GST calendar = GPST.
+    for e in &nav.galileo {
+        let af = [e.af0_s, e.af1_s_per_s, e.af2_s_per_s2];
+        write_first_line(w, 'E', e.prn, e.toc, af)?;
+        let tt = tt_of_week(e.transmission_time, e.toe.week);
+        let k = kepler_rows(f64::from(e.iodnav), &e.orbit, e.toe.sow);
+        let rows: [&[f64]; 7] = [
+            &k[0],
+            &k[1],
+            &k[2],
+            &k[3],
+            &[
+                e.orbit.idot_rad_per_s,
+                f64::from(e.data_sources),
+                f64::from(e.toe.week),
+                0.0,
+            ],
+            &[
+                e.sisa_m,
+                f64::from(e.health),
+                e.bgd_e1_e5a_s,
+                e.bgd_e1_e5b_s,
+            ],
+            &[tt],
+        ];
+        write_orbit_lines(w, &rows)?;
+    }
+    // BeiDou (RINEX 3.04 Table A14): the epoch is a BDT calendar date.
+    for e in &nav.beidou {
+        let af = [e.af0_s, e.af1_s_per_s, e.af2_s_per_s2];
+        let toc_cal = GpsTime::new(e.toc.week + BDT_WEEK0_IN_GPS_WEEKS, e.toc.sow);
+        write_first_line(w, 'C', e.prn, toc_cal, af)?;
+        let tt = tt_of_week(e.transmission_time, e.toe.week);
+        let k = kepler_rows(f64::from(e.aode), &e.orbit, e.toe.sow);
+        let rows: [&[f64]; 7] = [
+            &k[0],
+            &k[1],
+            &k[2],
+            &k[3],
+            &[e.orbit.idot_rad_per_s, 0.0, f64::from(e.toe.week), 0.0],
+            &[e.sv_accuracy_m, f64::from(e.sat_h1), e.tgd1_s, e.tgd2_s],
+            &[tt, f64::from(e.aodc)],
+        ];
+        write_orbit_lines(w, &rows)?;
+    }
+    // GLONASS (RINEX 3.04 Table A10, 3 orbit lines): the epoch is UTC = GPST - the
+    // header's LEAP SECONDS (18 when absent); km, km/s, km/s^2.
+    let leap = f64::from(nav.leap_seconds.unwrap_or(18));
+    for e in &nav.glonass {
+        let clock = [-e.tau_n_s, e.gamma_n, e.frame_time_s];
+        write_first_line(w, 'R', e.slot, e.tb.add_s(-leap), clock)?;
+        let (p, v, a) = (e.pos_m * 1e-3, e.vel_mps * 1e-3, e.acc_mps2 * 1e-3);
+        let rows: [&[f64]; 3] = [
+            &[p.x, v.x, a.x, f64::from(e.health)],
+            &[p.y, v.y, a.y, f64::from(e.freq_channel)],
+            &[p.z, v.z, a.z, e.age_days],
+        ];
+        write_orbit_lines(w, &rows)?;
+    }
+    Ok(())
+}
+
+/// A record's first line: system letter, PRN, the epoch `t` as a calendar date
+/// (whole seconds) and the three clock terms.
+fn write_first_line(
+    w: &mut impl Write,
+    sys: char,
+    prn: u8,
+    t: GpsTime,
+    af: [f64; 3],
+) -> io::Result<()> {
+    let c = t.to_calendar();
+    let sec = c.second.round() as u32;
+    write!(
+        w,
+        "{sys}{:02} {:04} {:02} {:02} {:02} {:02} {:02}",
+        prn,
+        c.year,
+        c.month,
+        c.day,
+        c.hour,
+        c.minute,
+        sec.min(59)
+    )?;
+    writeln!(w, "{}{}{}", d19(af[0])?, d19(af[1])?, d19(af[2])?)
+}
+
+/// Broadcast-orbit lines 1-4 of the Keplerian layout (GPS, Galileo, BeiDou, QZSS):
+/// issue of data, Crs, Delta n, M0 / Cuc, e, Cus, sqrt(A) / toe, Cic, Omega0, Cis /
+/// i0, Crc, omega, Omega_dot.
+fn kepler_rows(iod: f64, o: &KeplerOrbit, toe_sow: f64) -> [[f64; 4]; 4] {
+    [
+        [iod, o.crs_m, o.delta_n_rad_per_s, o.m0_rad],
+        [o.cuc_rad, o.e, o.cus_rad, o.sqrt_a_sqrt_m],
+        [toe_sow, o.cic_rad, o.omega0_rad, o.cis_rad],
+        [o.i0_rad, o.crc_m, o.omega_rad, o.omega_dot_rad_per_s],
+    ]
+}
+
+/// Transmission time as seconds of week `week` (0.9999e9 = unknown).
+fn tt_of_week(t: Option<GpsTime>, week: i32) -> f64 {
+    match t {
+        Some(t) => t.diff_s(&GpsTime::new(week, 0.0)),
+        None => TT_UNKNOWN,
+    }
+}
+
+/// Broadcast-orbit lines: `4X` then `D19.12` fields.
+fn write_orbit_lines(w: &mut impl Write, rows: &[&[f64]]) -> io::Result<()> {
+    for row in rows {
+        let mut s = String::from("    ");
+        for v in row.iter() {
+            s.push_str(&d19(*v)?);
         }
+        writeln!(w, "{s}")?;
     }
     Ok(())
 }

@@ -8,19 +8,25 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use nalgebra::{UnitQuaternion, Vector3};
+use navfuse_core::sat::System;
 use navfuse_core::types::{ImuErrors, NavState};
-use navfuse_gnss::constellation::{nominal_gps24, reissued, seed000_table3};
+use navfuse_gnss::constellation::{
+    beidou_toe_near, galileo_toe_near, glonass_records, nominal_beidou27, nominal_galileo24,
+    nominal_gps24, reissued, reissued_beidou, reissued_galileo, seed000_table3,
+};
 use navfuse_gnss::ephemeris::GpsEphemeris;
+use navfuse_gnss::obs::{MultiObsEpoch, ObsValue, SatSignals};
+use navfuse_gnss::signal::ObsCode;
 use navfuse_gnss::time::GpsTime;
 use navfuse_io::error::InputError;
 use navfuse_io::export::ExportFormat;
 use navfuse_io::fmt::push_fixed9;
 use navfuse_io::nav::{ImuErrWriter, NavWriter, RecordWriter, SolutionRecord};
 use navfuse_io::rinex_nav::{read_rinex_nav, write_rinex3_nav_dated, RinexNav};
-use navfuse_io::rinex_obs::{ObsHeader, RinexObsWriter};
+use navfuse_io::rinex_obs::{ssi_from_cn0, ObsHeader, RinexMultiObsWriter, RinexObsWriter};
 
 use crate::baro_sim::BaroSim;
-use crate::gnss_sim::{EventSpec, GnssSim};
+use crate::gnss_sim::{systems_of, EventSpec, GnssSim, SatEpoch};
 use crate::imu_model::{ImuErrorModel, ImuOutput};
 use crate::random::Stream;
 use crate::run_config::run_config_text;
@@ -80,12 +86,131 @@ impl Out {
     }
 }
 
+/// GPS - UTC \[s\] written to nav.rnx (`LEAP SECONDS`) and used for the GLONASS
+/// records' UTC epochs.
+const NAV_LEAP_SECONDS: i32 = 18;
+
+/// The obs.rnx writer: GPS-only RINEX 3.04, or mixed RINEX 3.05.
+enum ObsOut {
+    Gps(RinexObsWriter<BufWriter<File>>),
+    Multi(RinexMultiObsWriter<BufWriter<File>>),
+}
+
+/// "G05", "E11" for an event's satellite (validated).
+fn sat_label(r: &crate::gnss_sim::SatRef) -> String {
+    r.sat().map_or_else(|| r.to_string(), |s| s.to_string())
+}
+
 fn io_err(path: &Path) -> impl Fn(std::io::Error) -> InputError + '_ {
     move |e| InputError::write(path, &e)
 }
 
-/// The constellation and Klobuchar coefficients a scenario asks for.
-fn constellation(
+/// The constellation of every system a scenario asks for: GPS as
+/// [`gps_constellation`]; Galileo, BeiDou and GLONASS the bundled ones (Galileo and
+/// BeiDou re-issued hourly with SISA / URA the simulated signal-in-space error,
+/// GLONASS every 30 min), or those of `rinex_nav` with `constellation = "rinex"`.
+/// Only the systems simulated are built or kept.
+fn constellation(sc: &Scenario) -> Result<RinexNav, InputError> {
+    let g = sc.file.gnss.as_ref().expect("called with [gnss]");
+    let systems = systems_of(g);
+    let (mut gps, iono) = gps_constellation(sc)?;
+    let start = GpsTime::new(sc.file.start.gps_week as i32, sc.file.start.time_s);
+    let end = start.add_s(sc.trajectory.duration());
+    let e = &g.errors;
+    let ura_m = (e.orbit_m.powi(2) + e.sat_clock_m.powi(2) + e.sa_m.powi(2)).sqrt();
+    let has = |s: System| systems.contains(&s);
+    if !has(System::Gps) {
+        gps.clear();
+    }
+    let mut nav = RinexNav {
+        gps,
+        iono_alpha: iono.map(|i| i.0),
+        iono_beta: iono.map(|i| i.1),
+        ..RinexNav::default()
+    };
+    if systems == [System::Gps] {
+        return Ok(nav);
+    }
+    if g.constellation == "rinex" {
+        let p = sc
+            .base_dir()
+            .join(g.rinex_nav.as_deref().unwrap_or_default());
+        let file = read_rinex_nav(&p)?;
+        (nav.galileo, nav.beidou, nav.glonass) = (file.galileo, file.beidou, file.glonass);
+    } else {
+        if has(System::Galileo) {
+            let gal = nominal_galileo24(galileo_toe_near(start));
+            nav.galileo = reissued_galileo(&gal, start, end, 3_600.0);
+            nav.galileo.iter_mut().for_each(|e| e.sisa_m = ura_m);
+        }
+        if has(System::BeiDou) {
+            let bds = nominal_beidou27(beidou_toe_near(start));
+            nav.beidou = reissued_beidou(&bds, start, end, 3_600.0);
+            nav.beidou.iter_mut().for_each(|e| e.sv_accuracy_m = ura_m);
+        }
+        if has(System::Glonass) {
+            // GPS - UTC as written to nav.rnx's LEAP SECONDS.
+            nav.glonass = glonass_records(start, end, f64::from(NAV_LEAP_SECONDS));
+        }
+    }
+    if !has(System::Galileo) {
+        nav.galileo.clear();
+    }
+    if !has(System::BeiDou) {
+        nav.beidou.clear();
+    }
+    if !has(System::Glonass) {
+        nav.glonass.clear();
+    }
+    Ok(nav)
+}
+
+/// The signals written for each system: code, phase, Doppler, strength of GPS L1
+/// C/A, Galileo E1, GLONASS L1OF (C1C...) and BeiDou B1I (C2I...).
+fn obs_types(system: System) -> Vec<ObsCode> {
+    let names: [&[u8; 3]; 4] = match system {
+        System::BeiDou => [b"C2I", b"L2I", b"D2I", b"S2I"],
+        _ => [b"C1C", b"L1C", b"D1C", b"S1C"],
+    };
+    names.iter().map(|n| ObsCode(**n)).collect()
+}
+
+/// One simulated satellite as a RINEX 3 record: its system's four signals, LLI on
+/// the phase when set, the SSI of the C/N0 on each value.
+fn sat_signals(s: &SatEpoch) -> SatSignals {
+    let ssi = s.obs.cn0_dbhz.map(ssi_from_cn0).filter(|d| *d > 0);
+    let vals = [
+        s.obs.pseudorange_m,
+        s.obs.carrier_cycles,
+        s.obs.doppler_hz,
+        s.obs.cn0_dbhz,
+    ];
+    let signals = obs_types(s.sat.system)
+        .into_iter()
+        .zip(vals)
+        .enumerate()
+        .filter_map(|(k, (code, v))| {
+            let lli = (k == 1 && s.obs.lli != 0).then_some(s.obs.lli & 7);
+            v.map(|v| {
+                (
+                    code,
+                    ObsValue {
+                        value: Some(v),
+                        lli,
+                        ssi,
+                    },
+                )
+            })
+        })
+        .collect();
+    SatSignals {
+        sat: s.sat,
+        signals,
+    }
+}
+
+/// The GPS constellation and Klobuchar coefficients a scenario asks for.
+fn gps_constellation(
     sc: &Scenario,
 ) -> Result<(Vec<GpsEphemeris>, Option<([f64; 4], [f64; 4])>), InputError> {
     let g = sc.file.gnss.as_ref().expect("called with [gnss]");
@@ -211,11 +336,12 @@ pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError>
     let mut dgps_out = None;
     let mut err_csv = None;
     if let Some(g) = &gspec {
-        let (ephs, iono) = constellation(sc)?;
+        let cons = constellation(sc)?;
+        let systems = systems_of(g);
         let sim = GnssSim::new(
             g,
-            ephs.clone(),
-            iono,
+            cons.store(),
+            cons.iono_alpha.zip(cons.iono_beta),
             seed,
             week,
             traj.t_start(),
@@ -234,10 +360,13 @@ pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError>
             };
             let (alpha, beta) = sim.iono_coefficients();
             let nav = RinexNav {
-                gps: ephs,
+                gps: cons.gps.clone(),
+                galileo: cons.galileo.clone(),
+                beidou: cons.beidou.clone(),
+                glonass: cons.glonass.clone(),
                 iono_alpha: Some(alpha),
                 iono_beta: Some(beta),
-                leap_seconds: Some(18),
+                leap_seconds: Some(NAV_LEAP_SECONDS),
                 skipped_records: 0,
                 warnings: Vec::new(),
                 ..RinexNav::default()
@@ -265,11 +394,24 @@ pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError>
                 program: "navfuse sim".into(),
                 date: Some(stamp.clone()),
             };
-            obs_w = Some((
-                RinexObsWriter::new(BufWriter::with_capacity(1 << 20, f), &hdr)
-                    .map_err(io_err(&p))?,
-                p,
-            ));
+            let bw = BufWriter::with_capacity(1 << 20, f);
+            // GPS only: the RINEX 3.04 GPS file as always; else RINEX 3.05 mixed.
+            let w = if systems == [System::Gps] {
+                ObsOut::Gps(RinexObsWriter::new(bw, &hdr).map_err(io_err(&p))?)
+            } else {
+                let types: Vec<_> = systems.iter().map(|s| (*s, obs_types(*s))).collect();
+                let mut channels: Vec<(u8, i8)> = cons
+                    .glonass
+                    .iter()
+                    .map(|e| (e.slot, e.freq_channel))
+                    .collect();
+                channels.sort_unstable();
+                channels.dedup();
+                ObsOut::Multi(
+                    RinexMultiObsWriter::new(bw, &hdr, &types, &channels).map_err(io_err(&p))?,
+                )
+            };
+            obs_w = Some((w, p));
             files.push("obs.rnx".into());
         }
         if g.fix.is_some() {
@@ -359,9 +501,22 @@ pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError>
                 }
                 if let Some((w, p)) = obs_w.as_mut() {
                     if !ep.sats.is_empty() {
-                        let obs: Vec<_> = ep.sats.iter().map(|s| s.obs.clone()).collect();
-                        w.write_epoch(GpsTime::new(week as i32, ep.t), &obs)
-                            .map_err(io_err(p))?;
+                        let t = GpsTime::new(week as i32, ep.t);
+                        match w {
+                            ObsOut::Gps(w) => {
+                                let obs: Vec<_> = ep.sats.iter().map(|s| s.obs.clone()).collect();
+                                w.write_epoch(t, &obs).map_err(io_err(p))?;
+                            }
+                            ObsOut::Multi(w) => {
+                                let m = MultiObsEpoch {
+                                    t,
+                                    flag: 0,
+                                    rx_clock_offset_s: None,
+                                    sats: ep.sats.iter().map(sat_signals).collect(),
+                                };
+                                w.write_epoch(&m).map_err(io_err(p))?;
+                            }
+                        }
                     }
                 }
                 if let (Some(o), Some(f)) = (fix_out.as_mut(), ep.fix) {
@@ -419,7 +574,12 @@ pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError>
                             s,
                             "{:.3},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},",
                             ep.t,
-                            sat.obs.prn,
+                            // GPS: the PRN; other systems: "E11", "C23".
+                            if sat.sat.system == System::Gps {
+                                sat.obs.prn.to_string()
+                            } else {
+                                sat.sat.to_string()
+                            },
                             sat.el_rad.to_degrees(),
                             sat.az_rad.to_degrees(),
                             e.iono,
@@ -548,7 +708,11 @@ pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError>
         o.finish()?;
     }
     if let Some((w, p)) = obs_w {
-        let mut inner = w.finish().map_err(io_err(&p))?;
+        let mut inner = match w {
+            ObsOut::Gps(w) => w.finish(),
+            ObsOut::Multi(w) => w.finish(),
+        }
+        .map_err(io_err(&p))?;
         inner.flush().map_err(io_err(&p))?;
     }
     write_events(sc, out_dir, &mut files)?;
@@ -604,7 +768,13 @@ fn write_events(sc: &Scenario, dir: &Path, files: &mut Vec<String>) -> Result<()
                 t0 + end_s,
                 match (keep, prns) {
                     (Some(k), _) => format!("keep {k}"),
-                    (_, Some(p)) => format!("prns {p:?}").replace(',', ""),
+                    (_, Some(p)) => format!(
+                        "prns [{}]",
+                        p.iter()
+                            .map(|r| r.to_string())
+                            .collect::<Vec<_>>()
+                            .join(" ")
+                    ),
                     _ => String::new(),
                 }
             ),
@@ -627,9 +797,10 @@ fn write_events(sc: &Scenario, dir: &Path, files: &mut Vec<String>) -> Result<()
             .replace(", ", " "),
             EventSpec::CycleSlip { prn, at_s, cycles } => {
                 format!(
-                    "cycle_slip,{:.3},{:.3},G{prn:02} {cycles} cycles\n",
+                    "cycle_slip,{:.3},{:.3},{} {cycles} cycles\n",
                     t0 + at_s,
-                    t0 + at_s
+                    t0 + at_s,
+                    sat_label(prn)
                 )
             }
             EventSpec::LossOfLock {
@@ -638,9 +809,10 @@ fn write_events(sc: &Scenario, dir: &Path, files: &mut Vec<String>) -> Result<()
                 end_s,
             } => {
                 format!(
-                    "loss_of_lock,{:.3},{:.3},G{prn:02}\n",
+                    "loss_of_lock,{:.3},{:.3},{}\n",
                     t0 + start_s,
-                    t0 + end_s
+                    t0 + end_s,
+                    sat_label(prn)
                 )
             }
         };

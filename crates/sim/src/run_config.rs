@@ -167,8 +167,10 @@ pub fn run_config(sc: &Scenario, dir: &Path) -> RunConfig {
                 time_offset_s: 0.0,
             });
         } else if gs_.raw {
-            // Raw observations only: tight coupling on them.
+            // Raw observations only: tight coupling on them, with every system
+            // simulated.
             nav.tight.enabled = true;
+            nav.gnss.systems = crate::gnss_sim::systems_of(gs_);
             nav.tight.range_rate = RangeRate::Tdcp;
             gnss = Some(GnssSource {
                 path: dir.join("obs.rnx"),

@@ -69,6 +69,28 @@ pub struct KeplerOrbit {
     pub toe_sow_s: f64,
 }
 
+impl KeplerOrbit {
+    /// Every element zero (a start for `KeplerOrbit { sqrt_a_sqrt_m, .., ..ZERO }`).
+    pub const ZERO: KeplerOrbit = KeplerOrbit {
+        sqrt_a_sqrt_m: 0.0,
+        e: 0.0,
+        i0_rad: 0.0,
+        omega0_rad: 0.0,
+        omega_rad: 0.0,
+        m0_rad: 0.0,
+        delta_n_rad_per_s: 0.0,
+        omega_dot_rad_per_s: 0.0,
+        idot_rad_per_s: 0.0,
+        cuc_rad: 0.0,
+        cus_rad: 0.0,
+        crc_m: 0.0,
+        crs_m: 0.0,
+        cic_rad: 0.0,
+        cis_rad: 0.0,
+        toe_sow_s: 0.0,
+    };
+}
+
 /// Position and velocity (ECEF at t) with what the clock's relativistic term needs.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct KeplerState {

@@ -4,7 +4,8 @@
 //!
 //! Writer: [`RinexObsWriter`] produces a GPS-only RINEX 3.04 file (§5.2 header, §5.3
 //! epoch records: F14.3 value, LLI digit, SSI digit per observation; blank fields when
-//! absent) with C1C, L1C, D1C, S1C.
+//! absent) with C1C, L1C, D1C, S1C; [`RinexMultiObsWriter`] a RINEX 3.05 file of any
+//! system mix (`M: Mixed`) from [`MultiObsEpoch`]s.
 //!
 //! Readers: [`read_rinex_obs_all`] takes the version from `RINEX VERSION / TYPE` and
 //! reads RINEX 2.xx, 3.0x and 4.0x files of any system mix, plain, gzip or Compact
@@ -50,7 +51,7 @@ mod v2;
 mod v3;
 mod writer;
 
-pub use writer::{ssi_from_cn0, ObsHeader, RinexObsWriter};
+pub use writer::{ssi_from_cn0, ObsHeader, RinexMultiObsWriter, RinexObsWriter};
 
 pub use crx::crx_to_rinex;
 pub use navfuse_gnss::obs::{

@@ -3,6 +3,7 @@
 
 use nalgebra::Vector3;
 use navfuse_core::earth::{c_ne, ecef_to_lla, lla_to_ecef};
+use navfuse_core::sat::{SatId, System};
 use navfuse_gnss::atmosphere::{klobuchar_l1_delay_m, saastamoinen_slant_m, tropo_mapping};
 use navfuse_gnss::ephemeris::SPEED_OF_LIGHT_MPS;
 use navfuse_gnss::geometry::{az_el, signal_path};
@@ -10,8 +11,8 @@ use navfuse_gnss::time::GpsTime;
 use navfuse_io::rinex_obs::SatObs;
 
 use super::{
-    elevation_scale, iono_obliquity, DgpsCorrection, DgpsSpec, ErrorParts, EventSpec, Fix,
-    GnssEpoch, GnssSim, SatEpoch, L1_WAVELENGTH_M,
+    elevation_scale, iono_obliquity, sim_carrier_hz, DgpsCorrection, DgpsSpec, ErrorParts,
+    EventSpec, Fix, GnssEpoch, GnssSim, SatEpoch, L1_HZ,
 };
 use crate::trajectory::TruthSample;
 
@@ -28,7 +29,11 @@ impl GnssSim {
             self.tropo_common.step(dt, &mut self.rng_tropo);
             self.tropo_diff.step(dt, &mut self.rng_tropo);
             self.rx_clock.step(dt, &mut self.rng_rx);
-            for p in self.procs.iter_mut().flatten() {
+            let q = e.isb_walk_m_per_sqrth * (dt / 3_600.0).sqrt();
+            for (v, rng) in self.isb_walk.values_mut() {
+                *v += q * rng.normal();
+            }
+            for p in self.procs.values_mut() {
                 let r = &mut p.rng;
                 p.iono_common.step(dt, r);
                 p.iono_diff.step(dt, r);
@@ -94,7 +99,7 @@ impl GnssSim {
 
         out.outage = self.in_outage(rel);
         if out.outage {
-            for p in self.procs.iter_mut().flatten() {
+            for p in self.procs.values_mut() {
                 if p.tracked {
                     p.lli_pending = true;
                 }
@@ -110,11 +115,9 @@ impl GnssSim {
         // consistent signals. The true antenna sees the spoofer's signals only.
         let true_ecef = lla_to_ecef(&ant_lla);
         let mask = self.spec.elevation_mask_deg.to_radians();
-        let mut visible: Vec<(u8, f64)> = Vec::new();
-        let prns = self.ephs.prns();
         let mut paths = Vec::new();
-        for &prn in &prns {
-            let Some(eph) = self.ephs.select(prn, gt) else {
+        for sat in self.ephs.sats() {
+            let Some(eph) = self.ephs.select(sat, gt) else {
                 continue;
             };
             let path = signal_path(eph, &rx_ecef, &rx_vel_ecef, gt);
@@ -122,14 +125,15 @@ impl GnssSim {
             if el < mask {
                 continue;
             }
-            if self.blocked(rel, prn, el, &mut visible) {
+            if self.blocked(rel, sat) {
                 continue;
             }
-            let lost = self.spec.events.iter().any(|e| matches!(*e, EventSpec::LossOfLock { prn: p, start_s, end_s } if p == prn && rel > start_s && rel < end_s));
+            let lost = self.spec.events.iter().any(|e| matches!(e, EventSpec::LossOfLock { prn: p, start_s, end_s } if p.sat() == Some(sat) && rel > *start_s && rel < *end_s));
             if lost {
                 continue;
             }
-            paths.push((prn, (eph.tgd_s, eph.iode), path, az, el));
+            let f_hz = sim_carrier_hz(eph);
+            paths.push((sat, (eph.group_delay_s(), eph.iod(), f_hz), path, az, el));
         }
         // Blockage by count: keep the highest satellites.
         if let Some(keep) = self.blockage_keep(rel) {
@@ -137,32 +141,37 @@ impl GnssSim {
             paths.truncate(keep);
             paths.sort_by_key(|p| p.0);
         }
-        let tracked: Vec<u8> = paths.iter().map(|p| p.0).collect();
-        for (prn, p) in self.procs.iter_mut().enumerate() {
-            if let Some(p) = p {
-                let now = tracked.contains(&(prn as u8));
-                if !now && p.tracked {
-                    // Lost: a new ambiguity on reacquisition.
-                    p.ambiguity = (p.rng.uniform_range(-1e5, 1e5)).round() as i64;
-                }
-                if now && !p.tracked {
-                    p.lli_pending = true;
-                }
-                p.tracked = now;
+        let tracked: Vec<SatId> = paths.iter().map(|p| p.0).collect();
+        for (sat, p) in self.procs.iter_mut() {
+            let now = tracked.contains(sat);
+            if !now && p.tracked {
+                // Lost: a new ambiguity on reacquisition.
+                p.ambiguity = (p.rng.uniform_range(-1e5, 1e5)).round() as i64;
             }
+            if now && !p.tracked {
+                p.lli_pending = true;
+            }
+            p.tracked = now;
         }
-        for (prn, (tgd_s, iode), path, az, el) in paths {
-            let Some(p) = self.procs[prn as usize].as_mut() else {
+        for (sat, (tgd_s, iode, f_hz), path, az, el) in paths {
+            let Some(p) = self.procs.get_mut(&sat) else {
                 continue;
             };
+            let prn = sat.prn;
+            // The system's signal: wavelength, ionosphere scaling (f_L1/f)^2 of the
+            // L1-referred delays, receiver inter-system bias.
+            let wavelength_m = SPEED_OF_LIGHT_MPS / f_hz;
+            let iono_scale = (L1_HZ / f_hz).powi(2);
+            let isb_m = e.isb_of(sat.system) + self.isb_walk.get(&sat.system).map_or(0.0, |w| w.0);
             for ev in &self.spec.events {
                 if let EventSpec::CycleSlip {
                     prn: sp,
                     at_s,
                     cycles,
-                } = *ev
+                } = ev
                 {
-                    if sp == prn && at_s > rel - dt && at_s <= rel {
+                    let (at_s, cycles) = (*at_s, *cycles);
+                    if sp.sat() == Some(sat) && at_s > rel - dt && at_s <= rel {
                         p.ambiguity += cycles;
                         p.lli_pending = true;
                     }
@@ -172,17 +181,23 @@ impl GnssSim {
             let mt = tropo_mapping(el);
             let sc = elevation_scale(el);
             let noise = e.noise_m * sc * p.rng.normal();
+            // The receiver clock as this system's signals see it: + ISB (GPS: none).
+            let rx_clock = if isb_m == 0.0 {
+                self.rx_clock.value()
+            } else {
+                self.rx_clock.value() + isb_m
+            };
             let parts = ErrorParts {
-                iono: obl * (p.iono_common.value() + p.iono_diff.value()),
+                iono: iono_scale * (obl * (p.iono_common.value() + p.iono_diff.value())),
                 tropo: mt * (self.tropo_common.value() + self.tropo_diff.value()),
                 sat_clock: p.sat_clock.value(),
                 orbit: p.orbit_common.value() + p.orbit_diff.value(),
                 multipath: sc * p.multipath.value(),
                 noise,
-                rx_clock: self.rx_clock.value(),
+                rx_clock,
                 sa: p.sa.value(),
             };
-            let rates = obl * (p.iono_common.rate() + p.iono_diff.rate());
+            let rates = iono_scale * (obl * (p.iono_common.rate() + p.iono_diff.rate()));
             let tropo_rate = mt * (self.tropo_common.rate() + self.tropo_diff.rate());
             let common_rate = tropo_rate
                 + p.sat_clock.rate()
@@ -192,21 +207,23 @@ impl GnssSim {
                 + self.rx_clock.rate();
             let (model_iono, model_tropo) = if e.model_delays {
                 (
-                    klobuchar_l1_delay_m(
-                        &self.iono_alpha,
-                        &self.iono_beta,
-                        rx_lla.x,
-                        rx_lla.y,
-                        az,
-                        el,
-                        t,
-                    ),
+                    iono_scale
+                        * klobuchar_l1_delay_m(
+                            &self.iono_alpha,
+                            &self.iono_beta,
+                            rx_lla.x,
+                            rx_lla.y,
+                            az,
+                            el,
+                            t,
+                        ),
                     saastamoinen_slant_m(rx_lla.x, rx_lla.z, el),
                 )
             } else {
                 (0.0, 0.0)
             };
-            // Satellite clock as an L1 C/A user applies it (IS-GPS-200 20.3.3.3.3.2).
+            // Satellite clock as a single-frequency user applies it: minus TGD (GPS L1
+            // C/A, IS-GPS-200 20.3.3.3.3.2), BGD (Galileo E1), TGD1 (BeiDou B1I).
             let dts_m = (path.sat_clock_bias_s - tgd_s) * SPEED_OF_LIGHT_MPS;
             let dts_rate = path.sat_clock_drift_s_per_s * SPEED_OF_LIGHT_MPS;
             let range = path.geometric_range_m;
@@ -216,10 +233,9 @@ impl GnssSim {
                 + nondisp
                 + sc * p.phase_multipath.value()
                 + e.phase_noise_m * sc * p.rng.normal();
-            let carrier = phase_m / L1_WAVELENGTH_M + p.ambiguity as f64;
+            let carrier = phase_m / wavelength_m + p.ambiguity as f64;
             let range_rate = path.range_rate_mps - dts_rate + common_rate - rates;
-            let doppler =
-                -(range_rate + e.doppler_noise_mps * sc * p.rng.normal()) / L1_WAVELENGTH_M;
+            let doppler = -(range_rate + e.doppler_noise_mps * sc * p.rng.normal()) / wavelength_m;
             let cn0 = e.cn0_zenith_dbhz - 20.0 * sc.log10() + 0.5 * p.rng.normal();
             let lli = if p.lli_pending { 1 } else { 0 };
             p.lli_pending = false;
@@ -228,7 +244,11 @@ impl GnssSim {
             } else {
                 0.0
             };
-            let (dgps_residual, dgps_age_s) = match self.latest[prn as usize] {
+            let latest = match sat.system {
+                System::Gps => self.latest[prn as usize],
+                _ => None,
+            };
+            let (dgps_residual, dgps_age_s) = match latest {
                 Some(c) if c.iode == iode => {
                     let age = t - c.t;
                     let r = |rover: f64, refv: f64, rate: f64| rover - refv - rate * age;
@@ -250,6 +270,7 @@ impl GnssSim {
                 _ => (None, None),
             };
             out.sats.push(SatEpoch {
+                sat,
                 obs: SatObs {
                     prn,
                     pseudorange_m: Some(pr),
@@ -316,15 +337,15 @@ impl GnssSim {
         })
     }
 
-    /// Blockage by PRN list.
-    fn blocked(&self, rel: f64, prn: u8, _el: f64, _vis: &mut Vec<(u8, f64)>) -> bool {
+    /// Blockage by satellite list.
+    fn blocked(&self, rel: f64, sat: SatId) -> bool {
         self.spec.events.iter().any(|e| match e {
             EventSpec::Blockage {
                 start_s,
                 end_s,
                 prns: Some(list),
                 ..
-            } => rel > *start_s && rel < *end_s && !list.contains(&prn),
+            } => rel > *start_s && rel < *end_s && !list.iter().any(|r| r.sat() == Some(sat)),
             _ => false,
         })
     }
@@ -341,11 +362,16 @@ impl GnssSim {
         let ref_ecef = lla_to_ecef(ref_lla);
         let mask = self.spec.elevation_mask_deg.to_radians();
         let mut out = Vec::new();
-        for prn in self.ephs.prns() {
-            let Some(eph) = self.ephs.select(prn, gt) else {
+        // GPS only: dgps.csv carries GPS PRNs (RTCM 1/9 style).
+        for sat in self.ephs.sats() {
+            if sat.system != System::Gps {
+                continue;
+            }
+            let prn = sat.prn;
+            let Some(eph) = self.ephs.select(sat, gt) else {
                 continue;
             };
-            let Some(p) = self.procs[prn as usize].as_mut() else {
+            let Some(p) = self.procs.get_mut(&sat) else {
                 continue;
             };
             let path = signal_path(eph, &ref_ecef, &Vector3::zeros(), gt);
@@ -397,7 +423,7 @@ impl GnssSim {
                 prn,
                 prc_m: -(parts.total() + mi + mtr),
                 rrc_mps: -(rates.total()),
-                iode: eph.iode,
+                iode: eph.iod(),
                 parts,
                 parts_rate: rates,
             });

@@ -12,12 +12,14 @@
 //! Carrier phase: the same with the ionosphere sign reversed, its own small noise and
 //! multipath, plus an integer ambiguity. Doppler: -(d/dt of the phase range)/lambda.
 
-use std::collections::VecDeque;
+use std::collections::{BTreeMap, VecDeque};
 
 use nalgebra::Vector3;
 use navfuse_core::earth::{c_ne, ecef_to_lla, lla_to_ecef};
-use navfuse_gnss::ephemeris::{GpsEphemeris, SPEED_OF_LIGHT_MPS};
-use navfuse_gnss::ephemeris_set::EphemerisSet;
+use navfuse_core::sat::{SatId, System};
+use navfuse_gnss::ephemeris::{Ephemeris, SPEED_OF_LIGHT_MPS};
+use navfuse_gnss::ephemeris_store::EphemerisStore;
+use navfuse_gnss::signal::carrier_frequency_hz;
 use navfuse_io::rinex_obs::SatObs;
 
 use crate::random::{GaussMarkov, Stream};
@@ -28,11 +30,28 @@ mod spec;
 
 use processes::SmoothGm;
 pub use processes::{elevation_scale, iono_obliquity};
-pub use spec::{DgpsSpec, ErrorBudget, EventSpec, FixSpec, GnssSpec, HeadingSpec, SpoofMode};
+pub use spec::{
+    default_isb_m, systems_of, DgpsSpec, ErrorBudget, EventSpec, FixSpec, GnssSpec, HeadingSpec,
+    SatRef, SpoofMode,
+};
 
 /// GPS L1 frequency \[Hz\] and wavelength \[m\].
 pub const L1_HZ: f64 = 1_575.42e6;
 pub const L1_WAVELENGTH_M: f64 = SPEED_OF_LIGHT_MPS / L1_HZ;
+
+/// The carrier frequency \[Hz\] of the signal simulated for the satellite of `eph`:
+/// GPS L1 C/A, Galileo E1 (1575.42 MHz), BeiDou B1I (1561.098 MHz), GLONASS L1OF on
+/// the record's channel (1602 + 0.5625 k MHz), QZSS L1.
+pub fn sim_carrier_hz(eph: &Ephemeris) -> f64 {
+    let system = eph.sat().system;
+    let (band, channel) = match eph {
+        Ephemeris::BeiDou(_) => (2, None),
+        Ephemeris::Glonass(g) => (1, Some(g.freq_channel)),
+        _ => (1, None),
+    };
+    carrier_frequency_hz(system, band, channel).unwrap_or(L1_HZ)
+}
+
 /// Ionosphere single-layer height [m] and mean Earth radius [m] for the obliquity.
 const IONO_SHELL_M: f64 = 350e3;
 const EARTH_RADIUS_M: f64 = 6_371e3;
@@ -88,6 +107,8 @@ impl ErrorParts {
 /// One satellite at one epoch, with its truth.
 #[derive(Clone, Debug)]
 pub struct SatEpoch {
+    /// The satellite (`obs.prn` is its number in its system).
+    pub sat: SatId,
     pub obs: SatObs,
     pub el_rad: f64,
     pub az_rad: f64,
@@ -150,18 +171,21 @@ pub struct GnssEpoch {
 /// The GNSS simulator.
 pub struct GnssSim {
     spec: GnssSpec,
-    ephs: EphemerisSet,
+    ephs: EphemerisStore,
     iono_alpha: [f64; 4],
     iono_beta: [f64; 4],
     week: i32,
     t0: f64,
     lever_b: Vector3<f64>,
-    procs: Vec<Option<SatProc>>,
+    procs: BTreeMap<SatId, SatProc>,
     tropo_common: SmoothGm,
     tropo_diff: SmoothGm,
     rx_clock: SmoothGm,
     rng_tropo: Stream,
     rng_rx: Stream,
+    /// Random-walk part of each non-GPS system's ISB \[m\] and its stream (empty when
+    /// `isb_walk_m_per_sqrth` is 0).
+    isb_walk: BTreeMap<System, (f64, Stream)>,
     fix_err: [GaussMarkov; 3],
     rng_fix: Stream,
     rng_heading: Stream,
@@ -182,10 +206,11 @@ pub const DEFAULT_IONO_ALPHA: [f64; 4] = [1.1176e-8, 7.4506e-9, -5.9605e-8, -5.9
 pub const DEFAULT_IONO_BETA: [f64; 4] = [9.0112e4, 3.2768e4, -1.9661e5, -6.5536e4];
 
 impl GnssSim {
-    /// `ephs`: the constellation; `iono`: Klobuchar coefficients if known.
+    /// `ephs`: the constellation (every simulated system; GPS PRNs 1-32 used);
+    /// `iono`: Klobuchar coefficients if known.
     pub fn new(
         spec: &GnssSpec,
-        ephs: Vec<GpsEphemeris>,
+        ephs: EphemerisStore,
         iono: Option<([f64; 4], [f64; 4])>,
         seed: u64,
         week: u32,
@@ -193,8 +218,7 @@ impl GnssSim {
         start_lla: &Vector3<f64>,
     ) -> Self {
         let e = &spec.errors;
-        let mut procs: Vec<Option<SatProc>> = (0..=32).map(|_| None).collect();
-        let ephs = EphemerisSet::new(ephs);
+        let mut procs = BTreeMap::new();
         let (res_scale, ref_mp, iono_res, tropo_res, orbit_res) = match &spec.dgps {
             Some(d) => (
                 d.baseline_km / d.residual_baseline_km,
@@ -213,11 +237,11 @@ impl GnssSim {
         let (iono_c, iono_d) = split(e.iono_m, iono_res * res_scale);
         let (tropo_c, tropo_d) = split(e.tropo_m, tropo_res * res_scale);
         let (orbit_c, orbit_d) = split(e.orbit_m, orbit_res * res_scale);
-        for prn in ephs.prns() {
-            if prn == 0 || prn > 32 {
+        for sat in ephs.sats() {
+            if sat.system == System::Gps && (sat.prn == 0 || sat.prn > 32) {
                 continue;
             }
-            let mut rng = Stream::new(seed, &format!("gnss.sat.G{prn:02}"));
+            let mut rng = Stream::new(seed, &format!("gnss.sat.{sat}"));
             let p = SatProc {
                 iono_common: SmoothGm::new(iono_c, e.iono_tau_s, &mut rng),
                 iono_diff: SmoothGm::new(iono_d, e.iono_tau_s, &mut rng),
@@ -233,10 +257,25 @@ impl GnssSim {
                 lli_pending: false,
                 rng,
             };
-            procs[prn as usize] = Some(p);
+            procs.insert(sat, p);
         }
         let mut rng_tropo = Stream::new(seed, "gnss.tropo");
         let mut rng_rx = Stream::new(seed, "gnss.rx_clock");
+        let isb_walk = if e.isb_walk_m_per_sqrth > 0.0 {
+            let mut v: Vec<System> = ephs.sats().iter().map(|s| s.system).collect();
+            v.dedup();
+            v.into_iter()
+                .filter(|s| *s != System::Gps)
+                .map(|s| {
+                    (
+                        s,
+                        (0.0, Stream::new(seed, &format!("gnss.isb.{}", s.letter()))),
+                    )
+                })
+                .collect()
+        } else {
+            BTreeMap::new()
+        };
         let mut rng_fix = Stream::new(seed, "gnss.fix");
         let (fh, fv, ftau) = match &spec.fix {
             Some(f) => (
@@ -274,6 +313,7 @@ impl GnssSim {
             rx_clock: SmoothGm::new(e.rx_clock_m, e.rx_clock_tau_s, &mut rng_rx),
             rng_tropo,
             rng_rx,
+            isb_walk,
             fix_err: [
                 GaussMarkov::new(fh, ftau, &mut rng_fix),
                 GaussMarkov::new(fh, ftau, &mut rng_fix),

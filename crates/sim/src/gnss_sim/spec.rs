@@ -2,7 +2,10 @@
 //! dual-antenna heading, DGPS, and the events (outages, blockage, spoofing, cycle
 //! slips), with their defaults and checks.
 
+use std::collections::BTreeMap;
+
 use nalgebra::Vector3;
+use navfuse_core::sat::{SatId, System};
 use serde::Deserialize;
 
 use crate::trajectory::Trajectory;
@@ -20,6 +23,11 @@ pub struct GnssSpec {
     pub constellation: String,
     /// RINEX navigation file (relative to the scenario file) for `constellation = "rinex"`.
     pub rinex_nav: Option<String>,
+    /// Systems simulated, by RINEX letter: "G" GPS, "E" Galileo, "C" BeiDou, "R" GLONASS (default
+    /// ["G"]). Non-GPS satellites come from the bundled constellations
+    /// (navfuse_gnss::constellation), or from `rinex_nav` with `constellation = "rinex"`.
+    #[serde(default = "gps_only")]
+    pub systems: Vec<String>,
     /// Elevation mask \[deg\].
     #[serde(default = "ten")]
     pub elevation_mask_deg: f64,
@@ -50,6 +58,9 @@ fn ten() -> f64 {
 }
 fn yes() -> bool {
     true
+}
+fn gps_only() -> Vec<String> {
+    vec!["G".into()]
 }
 fn nominal() -> String {
     "nominal24".into()
@@ -109,6 +120,81 @@ pub struct ErrorBudget {
     /// the ionosphere/troposphere errors above are the residuals of those models).
     #[serde(default = "yes")]
     pub model_delays: bool,
+    /// Receiver inter-system bias of each non-GPS system against GPS \[m\], by letter
+    /// (`isb_m = { E = 3.0, C = -5.0, R = 7.0 }`): added to that system's code and phase
+    /// ranges. Systems not given use [`default_isb_m`]; GPS is the reference (0).
+    #[serde(default)]
+    pub isb_m: BTreeMap<String, f64>,
+    /// Random walk of each non-GPS system's ISB around `isb_m` [m/sqrt(h)]: 0 = constant
+    /// (the default). One walk per system (random stream `gnss.isb.E`, ...); not in the
+    /// Doppler (a walk has no rate).
+    #[serde(default)]
+    pub isb_walk_m_per_sqrth: f64,
+}
+
+/// Default receiver inter-system bias \[m\] of `system` against GPS: Galileo +3.0 m,
+/// BeiDou -5.0 m, GLONASS +7.0 m, QZSS 0 (non-zero so that solvers must estimate it).
+pub fn default_isb_m(system: System) -> f64 {
+    match system {
+        System::Galileo => 3.0,
+        System::BeiDou => -5.0,
+        System::Glonass => 7.0,
+        _ => 0.0,
+    }
+}
+
+impl ErrorBudget {
+    /// The inter-system bias of `system` in use \[m\] (0 for GPS).
+    pub fn isb_of(&self, system: System) -> f64 {
+        if system == System::Gps {
+            return 0.0;
+        }
+        let key = system.letter().to_string();
+        self.isb_m
+            .get(&key)
+            .copied()
+            .unwrap_or_else(|| default_isb_m(system))
+    }
+}
+
+/// A satellite named in an event: a plain number (GPS PRN) or "G05", "E11", "C23".
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(untagged)]
+pub enum SatRef {
+    Prn(u8),
+    Name(String),
+}
+
+impl SatRef {
+    /// The satellite, None when the name is not a system letter and a PRN.
+    pub fn sat(&self) -> Option<SatId> {
+        match self {
+            SatRef::Prn(p) => (*p > 0).then_some(SatId::gps(*p)),
+            SatRef::Name(s) if s.starts_with(|c: char| c.is_ascii_alphabetic()) => SatId::parse(s),
+            SatRef::Name(_) => None,
+        }
+    }
+}
+
+impl std::fmt::Display for SatRef {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SatRef::Prn(p) => write!(f, "{p}"),
+            SatRef::Name(s) => f.write_str(s),
+        }
+    }
+}
+
+/// The systems simulated, parsed from `systems` (validated).
+pub fn systems_of(spec: &GnssSpec) -> Vec<System> {
+    let mut v: Vec<System> = spec
+        .systems
+        .iter()
+        .filter_map(|s| s.chars().next().and_then(System::from_letter))
+        .collect();
+    v.sort();
+    v.dedup();
+    v
 }
 
 fn d_iono() -> f64 {
@@ -298,7 +384,8 @@ pub enum EventSpec {
         start_s: f64,
         end_s: f64,
         keep: Option<usize>,
-        prns: Option<Vec<u8>>,
+        /// Satellites kept: GPS PRNs or names ("G05", "E11").
+        prns: Option<Vec<SatRef>>,
     },
     /// Spoofing of fixes and raw measurements, consistently.
     Spoof {
@@ -313,10 +400,14 @@ pub enum EventSpec {
         delay_s: f64,
     },
     /// Cycle slip of `cycles` on one satellite at at_s.
-    CycleSlip { prn: u8, at_s: f64, cycles: i64 },
+    CycleSlip { prn: SatRef, at_s: f64, cycles: i64 },
     /// One satellite not tracked for start_s < t < end_s; reacquired with a new
     /// ambiguity and the loss-of-lock flag.
-    LossOfLock { prn: u8, start_s: f64, end_s: f64 },
+    LossOfLock {
+        prn: SatRef,
+        start_s: f64,
+        end_s: f64,
+    },
 }
 
 impl GnssSpec {
@@ -345,6 +436,35 @@ impl GnssSpec {
                 )
             }
         }
+        if self.systems.is_empty() {
+            return bad(
+                "systems",
+                "expected at least one of \"G\", \"E\", \"C\", \"R\"".into(),
+            );
+        }
+        for sys in &self.systems {
+            if !matches!(sys.as_str(), "G" | "E" | "C" | "R") {
+                return bad(
+                    "systems",
+                    format!(
+                        "expected \"G\" (GPS), \"E\" (Galileo), \"C\" (BeiDou) or \"R\" (GLONASS), got \"{sys}\""
+                    ),
+                );
+            }
+        }
+        for (k, v) in &self.errors.isb_m {
+            if !matches!(k.as_str(), "E" | "C" | "R") {
+                return bad(
+                    "errors.isb_m",
+                    format!(
+                        "expected keys \"E\", \"C\" or \"R\" (GPS is the reference), got \"{k}\""
+                    ),
+                );
+            }
+            if !v.is_finite() {
+                return bad("errors.isb_m", format!("expected a finite value, got {v}"));
+            }
+        }
         if !(0.0..=60.0).contains(&self.elevation_mask_deg) {
             return bad(
                 "elevation_mask_deg",
@@ -364,6 +484,7 @@ impl GnssSpec {
             ("errors.phase_noise_m", e.phase_noise_m),
             ("errors.phase_multipath_m", e.phase_multipath_m),
             ("errors.doppler_noise_mps", e.doppler_noise_mps),
+            ("errors.isb_walk_m_per_sqrth", e.isb_walk_m_per_sqrth),
         ];
         for (k, v) in sig {
             if !(v.is_finite() && v >= 0.0) {
@@ -457,6 +578,12 @@ impl GnssSpec {
                     if keep.is_some() == prns.is_some() {
                         return Err((key, "give exactly one of keep and prns".into()));
                     }
+                    if let Some(bad) = prns.iter().flatten().find(|p| p.sat().is_none()) {
+                        return Err((
+                            format!("{key}.prns"),
+                            format!("expected a GPS PRN or a name like \"G05\" / \"E11\", got \"{bad}\""),
+                        ));
+                    }
                 }
                 EventSpec::Spoof {
                     start_s,
@@ -480,6 +607,16 @@ impl GnssSpec {
                             format!("replay needs 0 < delay_s <= start_s, got {delay_s}"),
                         ));
                     }
+                }
+                EventSpec::CycleSlip { prn, .. } | EventSpec::LossOfLock { prn, .. }
+                    if prn.sat().is_none() =>
+                {
+                    return Err((
+                        format!("{key}.prn"),
+                        format!(
+                            "expected a GPS PRN or a name like \"G05\" / \"E11\", got \"{prn}\""
+                        ),
+                    ));
                 }
                 EventSpec::CycleSlip { at_s, .. } => {
                     if !(*at_s >= 0.0 && *at_s <= dur) {
