@@ -901,7 +901,10 @@ mod multi_tests {
                     // The latest batch before t (EphemerisStore's Galileo rule);
                     // before a satellite's first toe of the day, that first batch.
                     let first_hour = k * 300 < 3_600;
-                    assert!(age <= 3_600.0 + 1.0 && (age >= 0.0 || first_hour), "{s} {age}");
+                    assert!(
+                        age <= 3_600.0 + 1.0 && (age >= 0.0 || first_hour),
+                        "{s} {age}"
+                    );
                 } else {
                     assert!(age.abs() <= 1_800.0 + 1.0, "{s} {age}");
                 }
