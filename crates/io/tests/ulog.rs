@@ -184,3 +184,127 @@ fn hardware_log_imu_only_on_boot_time() {
     .to_string();
     assert!(g.contains("no GPS topic"), "{g}");
 }
+
+#[test]
+fn synthetic_log_every_message_type() {
+    let bytes = ulog::synth::synthetic_ulog(10);
+    let u = Ulog::parse(bytes.clone()).unwrap();
+    assert!(u.warnings.is_empty(), "{:?}", u.warnings);
+    assert_eq!(u.info["sys_name"], "synthetic");
+    assert_eq!(u.params["EKF2_GPS_DELAY"], 110.0);
+    assert_eq!(u.dropouts, (1, 25));
+    assert_eq!(u.log_messages.len(), 1);
+    assert_eq!(count(&u, "sensor_combined"), 1001);
+    assert_eq!(u.topic("sensor_baro", 1).unwrap().len(), 101);
+    let att = u.topic("vehicle_attitude", 0).unwrap();
+    assert!(att.has("delta.z") && att.has("q[3]") && !att.has("_padding0[0]"));
+    // GPS time: boot + 2024-03-18 00:00 UTC + 18 s = GPS week 2306, Monday.
+    let map = ulog::TimeMap::of(&u, 0);
+    assert_eq!(map.week, Some(2306));
+    let t0 = map.t(ulog::synth::T0_US);
+    assert!((t0 - (86_400.0 + 18.0 + 20.0)).abs() < 1e-6, "{t0}");
+    let dir = std::env::temp_dir().join(format!("navfuse-ulog-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join("synthetic.ulg");
+    std::fs::write(&p, &bytes).unwrap();
+    let mut r = open_imu(&ImuSource {
+        rate_hz: 100.0,
+        ..imu_src(p.clone())
+    })
+    .unwrap();
+    let s: Vec<_> = r.by_ref().map(|s| s.unwrap()).collect();
+    assert_eq!(s.len(), 1001);
+    assert!((s[1].dt - 0.01).abs() < 1e-9);
+    assert!((s[1].dvel.z + 0.0981).abs() < 1e-6, "{}", s[1].dvel);
+    assert!((s[1].dtheta.x - 1e-5).abs() < 1e-9);
+    let tr = read_trajectory(&p, Some(TrajFormat::Ulog), &[]).unwrap();
+    let yaw = tr.points[3].rpy.unwrap().z.to_degrees();
+    assert!((yaw - 90.0).abs() < 1e-4, "{yaw}");
+    assert!((tr.points[0].lla.z - 500.0).abs() < 1e-3);
+}
+
+/// Damaged input: errors or warnings with byte offsets, never a panic.
+#[test]
+fn damaged_logs_give_byte_offsets() {
+    let good = ulog::synth::synthetic_ulog(2);
+    // Truncated inside the last message: a warning, the rest kept.
+    let cut = &good[..good.len() - 5];
+    let u = Ulog::parse(cut.to_vec()).unwrap();
+    assert_eq!(u.warnings.len(), 1);
+    assert!(
+        u.warnings[0].contains("cut by the end of the file at byte"),
+        "{:?}",
+        u.warnings
+    );
+    // Cut inside a message header.
+    let n = good.len();
+    for k in 1..3 {
+        let u = Ulog::parse(good[..n - 21 - k].to_vec()).unwrap();
+        assert!(u.warnings[0].starts_with("byte "), "{:?}", u.warnings);
+    }
+    // Bad magic.
+    let mut bad = good.clone();
+    bad[1] = b'X';
+    let e = Ulog::parse(bad).unwrap_err();
+    assert_eq!(e.offset, 0);
+    assert!(e.to_string().contains("not a ULog file"), "{e}");
+    let e = Ulog::parse(b"ULog".to_vec()).unwrap_err();
+    assert!(e.to_string().contains("shorter than the 16-byte"), "{e}");
+    // A corrupted message size: the next "message" starts in the middle of data.
+    let first_data = find_first(&good, b'D');
+    let mut bad = good.clone();
+    bad[first_data] = bad[first_data].wrapping_add(7);
+    let e = Ulog::parse(bad).unwrap_err();
+    assert!(e.offset > first_data, "{e}");
+    println!("corrupted size: {e}");
+    // A data message too short for its format.
+    let mut bad = good.clone();
+    bad[first_data] -= 8;
+    let e = Ulog::parse(bad).unwrap_err();
+    assert_eq!(e.offset, first_data);
+    assert!(e.to_string().contains("its format needs"), "{e}");
+    // Every cut and a sweep of single-byte corruptions: no panic.
+    for k in (0..good.len()).step_by(7) {
+        let _ = Ulog::parse(good[..k].to_vec());
+        let mut b = good.clone();
+        b[k] ^= 0xA5;
+        let _ = Ulog::parse(b);
+    }
+    // Through the readers: the file's path and the byte offset.
+    let dir = std::env::temp_dir().join(format!("navfuse-ulog-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join("bad.ulg");
+    let mut bad = good.clone();
+    bad[first_data] -= 8;
+    std::fs::write(&p, &bad).unwrap();
+    let e = open_imu(&imu_src(p.clone())).err().unwrap().to_string();
+    assert!(
+        e.contains("bad.ulg") && e.contains(&format!("byte {first_data}")),
+        "{e}"
+    );
+    std::fs::write(&p, cut).unwrap();
+    let mut r = open_imu(&imu_src(p.clone())).unwrap();
+    for s in r.by_ref() {
+        s.unwrap();
+    }
+    assert!(
+        r.report()
+            .warnings
+            .iter()
+            .any(|w| w.contains("bad.ulg: byte ")),
+        "{:?}",
+        r.report().warnings
+    );
+}
+
+/// Offset of the first message of type `ty` (walking the message headers).
+fn find_first(b: &[u8], ty: u8) -> usize {
+    let mut pos = 16;
+    loop {
+        let size = u16::from_le_bytes([b[pos], b[pos + 1]]) as usize;
+        if b[pos + 2] == ty {
+            return pos;
+        }
+        pos += 3 + size;
+    }
+}

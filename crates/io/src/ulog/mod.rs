@@ -21,6 +21,7 @@
 //! seconds since boot and the week is unknown.
 
 pub mod parse;
+pub mod synth;
 
 pub use parse::{Topic, Ulog, UlogError, MAGIC};
 
