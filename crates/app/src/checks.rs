@@ -168,7 +168,7 @@ pub(crate) fn imu_window(cfg: &RunConfig, fix_lla: Option<Vector3<f64>>) -> Vec<
             },
             csv: true,
         },
-        ImuFormat::KfGins => plausibility::ImuUnits {
+        ImuFormat::KfGins | ImuFormat::Ulog { .. } => plausibility::ImuUnits {
             accel_scale: 1.0,
             gyro_scale: 1.0,
             csv: false,

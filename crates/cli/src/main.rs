@@ -149,15 +149,16 @@ enum Command {
     Eval {
         /// The solution: .nav, navfuse CSV, RTKLIB .pos or KF-GINS GNSS (by content).
         solution: PathBuf,
-        /// The reference: .nav, navfuse CSV, RTKLIB .pos or KF-GINS GNSS (by content).
+        /// The reference: .nav, navfuse CSV, RTKLIB .pos, KF-GINS GNSS or a PX4 ULog
+        /// (EKF2's estimate) (by content).
         truth: PathBuf,
-        /// The solution's format: auto (by content), nav, csv, pos or kfgins-gnss.
+        /// The solution's format: auto (by content), nav, csv, pos, kfgins-gnss or ulog.
         #[arg(long, value_name = "FORMAT", default_value = "auto",
-              value_parser = ["auto", "nav", "csv", "pos", "kfgins-gnss"])]
+              value_parser = ["auto", "nav", "csv", "pos", "kfgins-gnss", "ulog"])]
         solution_format: String,
-        /// The reference's format: auto (by content), nav, csv, pos or kfgins-gnss.
+        /// The reference's format: auto (by content), nav, csv, pos, kfgins-gnss or ulog.
         #[arg(long, value_name = "FORMAT", default_value = "auto",
-              value_parser = ["auto", "nav", "csv", "pos", "kfgins-gnss"])]
+              value_parser = ["auto", "nav", "csv", "pos", "kfgins-gnss", "ulog"])]
         truth_format: String,
         /// Outage windows: comma-separated `a:b` and `L/P@T[..U]` (see `run --outages`).
         #[arg(long, value_name = "SPEC")]

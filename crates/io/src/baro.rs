@@ -24,6 +24,17 @@ pub enum BaroQuantity {
     HeightM,
 }
 
+/// What kind of file the barometer input is.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BaroFormat {
+    /// `t value` text records.
+    #[default]
+    Text,
+    /// PX4 ULog `sensor_baro` / `vehicle_air_data`, topic instance `multi_id`
+    /// (docs/FORMATS.md "PX4 ULog"); `quantity` does not apply (pressures in Pa).
+    Ulog { multi_id: u8 },
+}
+
 /// A barometer input (`\[baro\]`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct BaroSource {
@@ -34,6 +45,7 @@ pub struct BaroSource {
     pub reference_pressure_pa: f64,
     /// Sensor delay removed from the time tags \[s\].
     pub delay_s: f64,
+    pub format: BaroFormat,
 }
 
 /// Read a barometer file into pressure altitudes; a last line cut mid-write (no line
@@ -43,6 +55,19 @@ pub fn read_baro(
     warnings: &mut Vec<String>,
 ) -> Result<Vec<BaroSample>, InputError> {
     let path = src.path.as_path();
+    if let BaroFormat::Ulog { multi_id } = src.format {
+        let u = crate::ulog::open(path, warnings)?;
+        let map = crate::ulog::TimeMap::of(&u, 0);
+        let p = crate::ulog::baro_pressures(path, &u, multi_id, &map)?;
+        return Ok(p
+            .into_iter()
+            .filter(|&(_, p)| (10_000.0..=120_000.0).contains(&p))
+            .map(|(t, p)| BaroSample {
+                t: t - src.delay_s,
+                height_m: pressure_altitude_m(p, src.reference_pressure_pa),
+            })
+            .collect());
+    }
     let mut lines = LineReader::open(path)?;
     let mut fields = Vec::with_capacity(4);
     let mut out: Vec<BaroSample> = Vec::new();

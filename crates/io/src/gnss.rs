@@ -67,6 +67,9 @@ pub fn read_gnss(src: &GnssSource) -> Result<GnssData, InputError> {
     let (epochs, gps_week) = match &src.format {
         GnssFormat::KfGins => (read_kfgins(path, src.time_offset_s, &mut warnings)?, None),
         GnssFormat::RtklibPos { .. } => read_pos(path, src.time_offset_s, &mut warnings)?,
+        GnssFormat::Ulog { multi_id } => {
+            read_ulog(path, *multi_id, src.time_offset_s, &mut warnings)?
+        }
         GnssFormat::Rinex(_) => {
             return Err(InputError::new(
                 path,
@@ -77,7 +80,7 @@ pub fn read_gnss(src: &GnssSource) -> Result<GnssData, InputError> {
     };
     let quality: &[u8] = match &src.format {
         GnssFormat::RtklibPos { quality } => quality,
-        GnssFormat::KfGins | GnssFormat::Rinex(_) => &[],
+        GnssFormat::KfGins | GnssFormat::Rinex(_) | GnssFormat::Ulog { .. } => &[],
     };
     let mut fixes = Vec::with_capacity(epochs.len());
     let mut skipped = 0;
@@ -334,6 +337,31 @@ fn parse_calendar(l: &Line<'_>) -> Result<(u32, f64), InputError> {
             ),
         )
     })
+}
+
+/// A PX4 ULog's GPS fixes (ulog/mod.rs), on the log's GPS week (None: boot seconds).
+fn read_ulog(
+    path: &Path,
+    multi_id: u8,
+    offset: f64,
+    warnings: &mut Vec<String>,
+) -> Result<(Vec<Epoch>, Option<u32>), InputError> {
+    let u = crate::ulog::open(path, warnings)?;
+    let map = crate::ulog::TimeMap::of(&u, multi_id);
+    let (fixes, _) = crate::ulog::gnss_fixes(path, &u, multi_id, &map)?;
+    let epochs = fixes
+        .into_iter()
+        .map(|mut fix| {
+            let t_file = fix.t;
+            fix.t += offset;
+            Epoch {
+                t_file,
+                quality: None,
+                fix,
+            }
+        })
+        .collect();
+    Ok((epochs, map.week))
 }
 
 fn read_pos(

@@ -120,6 +120,10 @@ pub enum ImuFormat {
     KfGins,
     Csv(CsvImuOptions),
     RtklibExplorer(RtklibExplorerImuOptions),
+    /// PX4 ULog `sensor_combined`, topic instance `multi_id` (docs/FORMATS.md "PX4 ULog").
+    Ulog {
+        multi_id: u8,
+    },
 }
 
 /// What the IMU reader does with an interval longer than 0.1 s (a gap in the data).
@@ -169,6 +173,8 @@ pub enum GnssFormat {
     /// processed by the GNSS layer into single point fixes (loose) or per-satellite
     /// measurements (tight).
     Rinex(RinexGnss),
+    /// PX4 ULog `vehicle_gps_position` / `sensor_gps`, topic instance `multi_id`.
+    Ulog { multi_id: u8 },
 }
 
 /// How RINEX observations are used.

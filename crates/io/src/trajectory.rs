@@ -33,6 +33,8 @@ pub enum TrajFormat {
     Pos,
     /// KF-GINS GNSS text: t, lat lon h, std N E D [, vel N E D, vel std N E D].
     KfGinsGnss,
+    /// PX4 ULog: EKF2's estimate (ulog/mod.rs `ekf2_track`), told by its magic.
+    Ulog,
 }
 
 /// What the detection looks for, for its error messages.
@@ -40,11 +42,12 @@ const EXPECTED: &str = "expected 11 (KF-GINS .nav), 7 or 13 (KF-GINS GNSS), a na
 header (gps_week,t_s,lat_deg,...) or an RTKLIB .pos (% header; 15 or 24 columns)";
 
 impl TrajFormat {
-    pub const ALL: [TrajFormat; 4] = [
+    pub const ALL: [TrajFormat; 5] = [
         TrajFormat::Nav,
         TrajFormat::Csv,
         TrajFormat::Pos,
         TrajFormat::KfGinsGnss,
+        TrajFormat::Ulog,
     ];
 
     /// The name of `--solution-format` / `--truth-format`.
@@ -54,6 +57,7 @@ impl TrajFormat {
             TrajFormat::Csv => "csv",
             TrajFormat::Pos => "pos",
             TrajFormat::KfGinsGnss => "kfgins-gnss",
+            TrajFormat::Ulog => "ulog",
         }
     }
 
@@ -64,6 +68,7 @@ impl TrajFormat {
             TrajFormat::Csv => "navfuse CSV",
             TrajFormat::Pos => "RTKLIB .pos",
             TrajFormat::KfGinsGnss => "KF-GINS GNSS text",
+            TrajFormat::Ulog => "PX4 ULog (EKF2)",
         }
     }
 
@@ -78,7 +83,7 @@ impl TrajFormat {
             .find(|f| f.name() == s)
             .map(Some)
             .ok_or_else(|| {
-                format!("unknown format {s:?}: expected auto, nav, csv, pos or kfgins-gnss")
+                format!("unknown format {s:?}: expected auto, nav, csv, pos, kfgins-gnss or ulog")
             })
     }
 }
@@ -94,6 +99,9 @@ fn is_pos_column_header(text: &[u8]) -> bool {
 /// the navfuse CSV header, RTKLIB's `%` header. Errors name the file and line and
 /// say what was expected.
 pub fn detect_format(path: &Path) -> Result<TrajFormat, InputError> {
+    if crate::ulog::is_ulog(path) {
+        return Ok(TrajFormat::Ulog);
+    }
     let mut lines = LineReader::open(path)?;
     let mut fields = Vec::with_capacity(32);
     let mut percent_header = false;
@@ -214,6 +222,18 @@ pub fn read_trajectory(
             quality: pos_quality.to_vec(),
         },
         TrajFormat::KfGinsGnss => GnssFormat::KfGins,
+        TrajFormat::Ulog => {
+            let mut warnings = Vec::new();
+            let u = crate::ulog::open(path, &mut warnings)?;
+            let (points, map, w) = crate::ulog::ekf2_track(path, &u)?;
+            warnings.extend(w);
+            return Ok(Trajectory {
+                format,
+                week: map.week.unwrap_or(0),
+                points,
+                warnings,
+            });
+        }
     };
     let g = read_gnss(&GnssSource {
         path: path.to_path_buf(),

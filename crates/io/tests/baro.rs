@@ -19,6 +19,7 @@ fn src(path: PathBuf, quantity: BaroQuantity, delay_s: f64) -> BaroSource {
         quantity,
         reference_pressure_pa: ISA_P0_PA,
         delay_s,
+        format: Default::default(),
     }
 }
 

@@ -218,6 +218,41 @@ fn dgps(p: &Path) -> Result<(), String> {
     Ok(())
 }
 
+/// A ULog through every reader that takes one: IMU, GNSS, barometer, EKF2 track.
+fn ulog(p: &Path) -> Result<(), String> {
+    check_imu(&imu_src(p, ImuFormat::Ulog { multi_id: 0 }, 100.0))?;
+    check_gnss(p, GnssFormat::Ulog { multi_id: 0 })?;
+    let src = navfuse_io::baro::BaroSource {
+        path: p.to_path_buf(),
+        quantity: navfuse_io::baro::BaroQuantity::PressurePa,
+        reference_pressure_pa: 101_325.0,
+        delay_s: 0.0,
+        format: navfuse_io::baro::BaroFormat::Ulog { multi_id: 0 },
+    };
+    if let Ok(b) = navfuse_io::baro::read_baro(&src, &mut Vec::new()) {
+        for s in &b {
+            finite("baro time", s.t)?;
+            finite("baro height", s.height_m)?;
+        }
+    }
+    let f = Some(navfuse_io::trajectory::TrajFormat::Ulog);
+    if let Ok(t) = navfuse_io::trajectory::read_trajectory(p, f, &[]) {
+        let mut prev = None;
+        for q in &t.points {
+            increasing("track time", &mut prev, q.t)?;
+            for v in q
+                .lla
+                .iter()
+                .chain(q.v_n.iter().flatten())
+                .chain(q.rpy.iter().flatten())
+            {
+                finite("track value", *v)?;
+            }
+        }
+    }
+    Ok(())
+}
+
 fn nav(p: &Path) -> Result<(), String> {
     let Ok(n) = navfuse_io::nav::read_nav(p) else {
         return Ok(());
@@ -397,6 +432,13 @@ fn targets() -> Vec<Target> {
             dgps,
         ),
         t("nav", "nav", &[&format!("{f}truth.nav")], nav),
+        // The shared logs are 1.5 and 4 MB: a synthetic 2 s log (every message type).
+        Target {
+            name: "ulog",
+            ext: "ulg",
+            seeds: vec![navfuse_io::ulog::synth::synthetic_ulog(2)],
+            check: ulog,
+        },
         t("rinex_nav", "nav", &[&format!("{f}walk_0827.nav")], rinex_nav),
         t(
             "rinex_obs",

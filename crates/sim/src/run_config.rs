@@ -238,6 +238,7 @@ pub fn run_config(sc: &Scenario, dir: &Path) -> RunConfig {
             quantity: BaroQuantity::PressurePa,
             reference_pressure_pa: b.reference_pressure_pa,
             delay_s: b.delay_s,
+            format: Default::default(),
         }
     });
     RunConfig {

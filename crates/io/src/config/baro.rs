@@ -11,12 +11,25 @@ use super::paths::{file_key, PathWriter};
 use super::units::{arr3, vec3, SAME, VRW};
 use super::validate::{finite, gate, non_negative, opt_or, positive, std_pos, v3};
 use super::values::Gate;
-use crate::baro::{BaroQuantity, BaroSource};
+use crate::baro::{BaroFormat, BaroQuantity, BaroSource};
+
+/// `baro.format`: text records (default) or a PX4 ULog.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub(super) enum TBaroFormat {
+    Text,
+    Ulog,
+}
 
 #[derive(Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct TBaro {
     pub(super) file: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) format: Option<TBaroFormat>,
+    /// `baro.format = "ulog"`: the topic instance (multi_id).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) ulog_instance: Option<u8>,
     /// What the value column holds (default: pressure in Pa).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) quantity: Option<BaroQuantity>,
@@ -37,7 +50,20 @@ pub(super) struct TBaro {
 
 pub(super) fn convert(b: &TBaro, base: &Path) -> KResult<(BaroSource, BaroOptions)> {
     let d = BaroOptions::default();
+    let format = match b.format.unwrap_or(TBaroFormat::Text) {
+        TBaroFormat::Ulog => BaroFormat::Ulog {
+            multi_id: b.ulog_instance.unwrap_or(0),
+        },
+        TBaroFormat::Text if b.ulog_instance.is_some() => {
+            return Err(super::error::kerr(
+                "baro.ulog_instance",
+                "applies only to baro.format = \"ulog\"",
+            ))
+        }
+        TBaroFormat::Text => BaroFormat::Text,
+    };
     let src = BaroSource {
+        format,
         path: file_key(base, "baro.file", &b.file)?,
         quantity: b.quantity.unwrap_or(BaroQuantity::PressurePa),
         reference_pressure_pa: opt_or(
@@ -77,6 +103,14 @@ pub(super) fn to_toml(src: Option<&BaroSource>, o: &BaroOptions, w: &PathWriter)
     let src = src.filter(|_| o.enabled)?;
     Some(TBaro {
         file: w.path(&src.path),
+        format: match src.format {
+            BaroFormat::Text => None,
+            BaroFormat::Ulog { .. } => Some(TBaroFormat::Ulog),
+        },
+        ulog_instance: match src.format {
+            BaroFormat::Ulog { multi_id } => Some(multi_id),
+            BaroFormat::Text => None,
+        },
         quantity: Some(src.quantity),
         reference_pressure_pa: Some(src.reference_pressure_pa),
         delay_s: Some(src.delay_s),

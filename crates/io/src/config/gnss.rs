@@ -29,6 +29,8 @@ pub(super) enum TGnssFormat {
     RtklibPos,
     #[serde(rename = "rinex")]
     Rinex,
+    #[serde(rename = "ulog")]
+    Ulog,
 }
 
 /// `gnss.fusion`. A raw type: `GnssFusion::SixState` carries `gnss.six_state_every`.
@@ -84,6 +86,9 @@ pub(super) struct TGnss {
     pub(super) tight: Option<TTight>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) quality: Option<Vec<u8>>,
+    /// `gnss.format = "ulog"`: the GPS topic instance (multi_id).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) ulog_instance: Option<u8>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) decimate_s: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -148,6 +153,7 @@ impl TGnss {
             systems: None,
             tight: None,
             quality: None,
+            ulog_instance: None,
             decimate_s: None,
             time_offset_s: None,
             lever_arm_m: None,
@@ -198,8 +204,25 @@ pub(super) fn convert(
             return Err(kerr(key, "applies only to gnss.format = \"rinex\""));
         }
     }
+    if g.format != TGnssFormat::Ulog && g.ulog_instance.is_some() {
+        return Err(kerr(
+            "gnss.ulog_instance",
+            "applies only to gnss.format = \"ulog\"",
+        ));
+    }
     let mut tight = TightOptions::default();
     let format = match g.format {
+        TGnssFormat::Ulog => {
+            if g.quality.is_some() {
+                return Err(kerr(
+                    "gnss.quality",
+                    "applies only to gnss.format = \"rtklib-pos\"",
+                ));
+            }
+            GnssFormat::Ulog {
+                multi_id: g.ulog_instance.unwrap_or(0),
+            }
+        }
         TGnssFormat::KfGins => {
             if g.quality.is_some() {
                 return Err(kerr(
@@ -406,12 +429,17 @@ pub(super) fn to_toml(
         GnssFormat::KfGins => (TGnssFormat::KfGins, None),
         GnssFormat::RtklibPos { quality } => (TGnssFormat::RtklibPos, Some(quality.clone())),
         GnssFormat::Rinex(_) => (TGnssFormat::Rinex, None),
+        GnssFormat::Ulog { .. } => (TGnssFormat::Ulog, None),
     };
     let (outages, outage_every) = outages::to_toml(&go.outages, relative);
     let mut t = TGnss {
         file: w.path(&g.path),
         format,
         quality,
+        ulog_instance: match g.format {
+            GnssFormat::Ulog { multi_id } => Some(multi_id),
+            _ => None,
+        },
         decimate_s: g.decimate_s,
         time_offset_s: Some(g.time_offset_s),
         lever_arm_m: Some(arr3(&go.lever_arm_b).to_vec()),

@@ -20,6 +20,8 @@ pub(super) enum TImuFormat {
     Csv,
     #[serde(rename = "rtklibexplorer")]
     RtklibExplorer,
+    #[serde(rename = "ulog")]
+    Ulog,
 }
 
 #[derive(Debug, Deserialize, Serialize)]
@@ -40,6 +42,9 @@ pub(super) struct TImu {
     pub(super) max_bridge_s: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) csv: Option<TCsv>,
+    /// `imu.format = "ulog"`: the topic instance (multi_id) of sensor_combined.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) ulog_instance: Option<u8>,
 }
 
 /// `imu.gap_policy`. A raw type: `GapPolicy::Bridge` carries `imu.max_bridge_s`.
@@ -87,8 +92,17 @@ pub(super) fn convert(m: &TImu, base: &Path) -> KResult<ImuSource> {
             "applies only to imu.format = \"rtklibexplorer\"",
         ));
     }
+    if m.format != TImuFormat::Ulog && m.ulog_instance.is_some() {
+        return Err(kerr(
+            "imu.ulog_instance",
+            "applies only to imu.format = \"ulog\"",
+        ));
+    }
     let format = match m.format {
         TImuFormat::KfGins => ImuFormat::KfGins,
+        TImuFormat::Ulog => ImuFormat::Ulog {
+            multi_id: m.ulog_instance.unwrap_or(0),
+        },
         TImuFormat::Csv => {
             let c = m.csv.as_ref().ok_or_else(|| {
                 kerr(
@@ -124,6 +138,7 @@ pub(super) fn convert(m: &TImu, base: &Path) -> KResult<ImuSource> {
 pub(super) fn to_toml(m: &ImuSource, w: &PathWriter) -> TImu {
     let (format, tag_file, csv) = match &m.format {
         ImuFormat::KfGins => (TImuFormat::KfGins, None, None),
+        ImuFormat::Ulog { .. } => (TImuFormat::Ulog, None, None),
         ImuFormat::RtklibExplorer(o) => {
             (TImuFormat::RtklibExplorer, Some(w.path(&o.tag_path)), None)
         }
@@ -145,5 +160,9 @@ pub(super) fn to_toml(m: &ImuSource, w: &PathWriter) -> TImu {
             GapPolicy::Nominal => None,
         },
         csv,
+        ulog_instance: match m.format {
+            ImuFormat::Ulog { multi_id } => Some(multi_id),
+            _ => None,
+        },
     }
 }

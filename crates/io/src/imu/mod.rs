@@ -111,6 +111,7 @@ pub fn open_imu(src: &ImuSource) -> Result<ImuReader, InputError> {
             .map_err(|m| InputError::new(path, m).with_field("max_bridge_s"))?;
     }
     let lines = LineReader::open(path)?;
+    let mut ulog_warnings = Vec::new();
     let nominal_dt = 1.0 / rate_hz;
     let mut gps_week = None;
     let (kind, quantity, sampling) = match &src.format {
@@ -149,6 +150,15 @@ pub fn open_imu(src: &ImuSource) -> Result<ImuReader, InputError> {
             });
             (kind, ImuQuantity::Rate, RateSampling::Instant)
         }
+        ImuFormat::Ulog { multi_id } => {
+            let u = crate::ulog::open(path, &mut ulog_warnings)?;
+            let map = crate::ulog::TimeMap::of(&u, 0);
+            gps_week = map.week;
+            let (mut raw, _) = crate::ulog::imu_rates(path, &u, *multi_id, &map)?;
+            raw.iter_mut().for_each(|r| r.0 += src.time_offset_s);
+            let kind = Kind::Ulog(raw.into_iter());
+            (kind, ImuQuantity::Rate, RateSampling::IntervalMean)
+        }
     };
     Ok(ImuReader {
         lines,
@@ -168,6 +178,7 @@ pub fn open_imu(src: &ImuSource) -> Result<ImuReader, InputError> {
             path: path.to_path_buf(),
             nominal_dt,
             gap_policy: src.gap_policy,
+            warnings: ulog_warnings,
             ..ImuReport::default()
         },
         done: false,
@@ -189,6 +200,21 @@ impl ImuReader {
     /// Read lines until one gives a sample, the file ends or an error occurs. An error
     /// on the last line drops it with a warning.
     fn read_sample(&mut self) -> Result<Option<ImuSample>, InputError> {
+        if matches!(self.kind, Kind::Ulog(_)) {
+            // ULog records: "line" numbers count records (1-based).
+            while let Some((t, g, a)) = match &mut self.kind {
+                Kind::Ulog(it) => it.next(),
+                _ => None,
+            } {
+                self.report.lines += 1;
+                let ln = self.report.lines;
+                if let Some(s) = self.process(ln, t, g, a)? {
+                    return Ok(Some(s));
+                }
+            }
+            self.finish();
+            return Ok(None);
+        }
         loop {
             let Some((ln, line)) = self.lines.next_line()? else {
                 self.finish();
@@ -198,6 +224,7 @@ impl ImuReader {
             let raw = match &self.kind {
                 Kind::KfGins => parse_kfgins(&self.path, ln, line, &mut self.fields, self.offset),
                 Kind::Csv(k) => parse_csv(&self.path, ln, line, &mut self.fields, k, self.offset),
+                Kind::Ulog(_) => Ok(None),
                 Kind::Rtk(k) => {
                     match parse_rtk(&self.path, ln, line, &mut self.fields, k, self.offset) {
                         Ok(RtkLine::Sample(r)) => Ok(Some(r)),

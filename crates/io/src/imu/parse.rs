@@ -41,6 +41,8 @@ pub(super) enum Kind {
     KfGins,
     Csv(Box<CsvKind>),
     Rtk(RtkKind),
+    /// PX4 ULog: the samples read up front (ulog/mod.rs), interval-mean rates.
+    Ulog(std::vec::IntoIter<Raw>),
 }
 
 /// A finite number from field `k`.
