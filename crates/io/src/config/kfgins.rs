@@ -182,6 +182,7 @@ pub(super) fn kfgins_to_raw(y: KfYaml, w: &mut Vec<String>) -> KResult<(TomlRoot
             gap_policy: None,
             max_bridge_s: None,
             csv: None,
+            files: None,
         },
         gnss: Some(TGnss {
             file: y.gnsspath,
