@@ -156,7 +156,16 @@ pub(crate) fn imu_window(cfg: &RunConfig, fix_lla: Option<Vector3<f64>>) -> Vec<
     let Some(w) = plausibility::imu_window(&samples) else {
         return Vec::new();
     };
-    let units = match &cfg.imu.format {
+    // Several CSV files have the units of one.
+    let joined;
+    let format = match &cfg.imu.format {
+        ImuFormat::CsvFiles(f) => {
+            joined = ImuFormat::Csv(f.csv.clone());
+            &joined
+        }
+        f => f,
+    };
+    let units = match format {
         ImuFormat::Csv(o) => plausibility::ImuUnits {
             accel_scale: match o.accel_unit {
                 AccelUnit::G => navfuse_io::imu::STANDARD_GRAVITY,
@@ -173,7 +182,7 @@ pub(crate) fn imu_window(cfg: &RunConfig, fix_lla: Option<Vector3<f64>>) -> Vec<
             gyro_scale: 1.0,
             csv: false,
         },
-        ImuFormat::RtklibExplorer(_) => plausibility::ImuUnits {
+        ImuFormat::RtklibExplorer(_) | ImuFormat::CsvFiles(_) => plausibility::ImuUnits {
             accel_scale: navfuse_io::imu::STANDARD_GRAVITY,
             gyro_scale: 1f64.to_radians(),
             csv: false,

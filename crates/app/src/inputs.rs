@@ -93,7 +93,14 @@ pub(crate) fn read(cfg: &RunConfig, job: &mut JobResult, warn: bool) -> Result<I
     };
     let mut heading: Vec<HeadingObs> = match &cfg.heading {
         Some(src) if cfg.nav.heading.baseline_b.is_some() => {
-            let h = read_heading_report(&src.path, &mut reader_warnings)?;
+            let h = match &src.nmea {
+                None => read_heading_report(&src.path, &mut reader_warnings)?,
+                Some(o) => {
+                    let d = navfuse_io::nmea::read_nmea(&src.path, o)?;
+                    reader_warnings.extend(d.warnings);
+                    d.heading
+                }
+            };
             if h.is_empty() {
                 input_notes.push(format!("{}: no heading records", src.path.display()));
             }

@@ -11,7 +11,7 @@
 //! file, line and field.
 
 use crate::error::InputError;
-use crate::fmt::{after_record, field, is_comment_line, parse_f64, split_fields, LineReader};
+use crate::fmt::{after_record, field, parse_f64, split_fields, LineReader};
 use navfuse_core::aiding::baro::{pressure_altitude_m, BaroSample};
 use std::path::PathBuf;
 
@@ -74,10 +74,11 @@ pub fn read_baro(
     let mut prev_t: Option<f64> = None;
     let mut seen_record = false;
     let mut warn = Some(warnings);
+    let mut header = crate::fmt::SkipLines::default();
     while let Some((ln, text)) = lines.next_line()? {
         let mut record = || -> Result<(), InputError> {
             split_fields(text, &mut fields);
-            if is_comment_line(text, &fields) {
+            if header.skip(text, &fields) {
                 return Ok(());
             }
             // A header line of names before the first record.

@@ -404,6 +404,30 @@ pub(crate) fn is_comment_line(line: &[u8], fields: &[(usize, usize)]) -> bool {
     }
 }
 
+/// What the plain text readers (KF-GINS GNSS, heading, odometer, barometer, DGPS)
+/// skip: comment and blank lines ([`is_comment_line`]) and a header, the first other
+/// line when none of its fields is a number (column names such as `t,speed_mps`).
+/// Line numbers are the file's, header or not.
+#[derive(Default)]
+pub(crate) struct SkipLines {
+    data_seen: bool,
+}
+
+impl SkipLines {
+    /// True when the line (split into `fields`) is to be skipped.
+    pub(crate) fn skip(&mut self, line: &[u8], fields: &[(usize, usize)]) -> bool {
+        if is_comment_line(line, fields) {
+            return true;
+        }
+        if std::mem::replace(&mut self.data_seen, true) {
+            return false;
+        }
+        fields
+            .iter()
+            .all(|&(s, e)| line.get(s..e).and_then(parse_f64).is_none())
+    }
+}
+
 /// Append `v` with exactly 9 decimals, byte for byte as `format!("{:.9}", v)`.
 ///
 /// Fast path for |v| < 4e6: |v| = m 2^e exactly, so |v| 1e9 = m 1e9 / 2^-e is rounded

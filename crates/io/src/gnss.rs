@@ -6,9 +6,7 @@
 //! (.pos only) and decimated. See docs/FORMATS.md.
 
 use crate::error::InputError;
-use crate::fmt::{
-    field, for_each_line, is_comment_line, parse_f64, split_fields, LineError, LineReader,
-};
+use crate::fmt::{field, for_each_line, parse_f64, split_fields, LineError, LineReader};
 use crate::input::{GnssFormat, GnssSource};
 use crate::time::{calendar_to_week_sow, Calendar, SECONDS_PER_WEEK};
 use nalgebra::Vector3;
@@ -64,11 +62,22 @@ pub fn read_gnss(src: &GnssSource) -> Result<GnssData, InputError> {
         }
     };
     let mut warnings = Vec::new();
+    let mut extra_skipped = 0;
     let (epochs, gps_week) = match &src.format {
         GnssFormat::KfGins => (read_kfgins(path, src.time_offset_s, &mut warnings)?, None),
         GnssFormat::RtklibPos { .. } => read_pos(path, src.time_offset_s, &mut warnings)?,
         GnssFormat::Ulog { multi_id } => {
             read_ulog(path, *multi_id, src.time_offset_s, &mut warnings)?
+        }
+        GnssFormat::Nmea(o) => {
+            let d = crate::nmea::read_nmea(path, o)?;
+            warnings.extend(d.warnings);
+            extra_skipped = d.no_fix;
+            (as_epochs(d.fixes, src.time_offset_s), d.gps_week)
+        }
+        GnssFormat::Csv(o) => {
+            let (fixes, week) = crate::gnss_csv::read_csv_gnss(path, o, &mut warnings)?;
+            (as_epochs(fixes, src.time_offset_s), week)
         }
         GnssFormat::Rinex(_) => {
             return Err(InputError::new(
@@ -80,10 +89,10 @@ pub fn read_gnss(src: &GnssSource) -> Result<GnssData, InputError> {
     };
     let quality: &[u8] = match &src.format {
         GnssFormat::RtklibPos { quality } => quality,
-        GnssFormat::KfGins | GnssFormat::Rinex(_) | GnssFormat::Ulog { .. } => &[],
+        _ => &[],
     };
     let mut fixes = Vec::with_capacity(epochs.len());
-    let mut skipped = 0;
+    let mut skipped = extra_skipped;
     for e in epochs {
         let q_ok = quality.is_empty() || e.quality.is_some_and(|q| quality.contains(&q));
         let d_ok = match decimate_us {
@@ -106,6 +115,22 @@ pub fn read_gnss(src: &GnssSource) -> Result<GnssData, InputError> {
         skipped,
         warnings,
     })
+}
+
+/// Fixes of a reader that returns them whole (file times in `t`) as epochs, with
+/// the source's time offset added.
+fn as_epochs(fixes: Vec<GnssFix>, offset: f64) -> Vec<Epoch> {
+    fixes
+        .into_iter()
+        .map(|f| Epoch {
+            t_file: f.t,
+            quality: None,
+            fix: GnssFix {
+                t: f.t + offset,
+                ..f
+            },
+        })
+        .collect()
 }
 
 /// Field reader bound to one line.
@@ -187,9 +212,10 @@ fn read_kfgins(
     let mut fields = Vec::with_capacity(16);
     let mut out = Vec::new();
     let mut prev: Option<f64> = None;
+    let mut header = crate::fmt::SkipLines::default();
     for_each_line(&mut lines, warnings, |ln, text| {
         split_fields(text, &mut fields);
-        if is_comment_line(text, &fields) {
+        if header.skip(text, &fields) {
             return Ok(());
         }
         let l = Line {

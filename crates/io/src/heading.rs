@@ -12,7 +12,7 @@
 //! gives an empty list.
 
 use crate::error::InputError;
-use crate::fmt::{after_record, field, is_comment_line, parse_f64, split_fields, LineReader};
+use crate::fmt::{after_record, field, parse_f64, split_fields, LineReader};
 use navfuse_core::HeadingObs;
 use std::path::Path;
 
@@ -41,10 +41,11 @@ fn read(
     let mut fields = Vec::with_capacity(8);
     let mut out: Vec<HeadingObs> = Vec::new();
     let mut prev: Option<f64> = None;
+    let mut header = crate::fmt::SkipLines::default();
     while let Some((ln, text)) = lines.next_line()? {
         let mut record = || -> Result<(), InputError> {
             split_fields(text, &mut fields);
-            if is_comment_line(text, &fields) {
+            if header.skip(text, &fields) {
                 return Ok(());
             }
             if fields.len() != 3 {

@@ -124,6 +124,33 @@ pub enum ImuFormat {
     Ulog {
         multi_id: u8,
     },
+    /// Several CSV files joined (imu/join.rs).
+    CsvFiles(Box<CsvImuFiles>),
+}
+
+/// One gyro or accelerometer file of [`CsvImuFiles`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct CsvImuPart {
+    pub path: PathBuf,
+    /// 0-based time column: rows joined on time; None: row by row.
+    pub time_col: Option<usize>,
+    /// 0-based x, y, z columns.
+    pub cols: [usize; 3],
+}
+
+/// An IMU in several CSV files: times, gyro and accelerometer (`[imu] files`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CsvImuFiles {
+    pub time_path: PathBuf,
+    pub time_col: usize,
+    pub gyro: CsvImuPart,
+    pub accel: CsvImuPart,
+    /// Lines to skip at the top of every file; None: a first line without a number.
+    pub skip_lines: Option<usize>,
+    /// Largest time difference of joined rows \[s\].
+    pub tolerance_s: f64,
+    /// Units, time unit and scale, quantity and sampling (the columns are unused).
+    pub csv: CsvImuOptions,
 }
 
 /// What the IMU reader does with an interval longer than 0.1 s (a gap in the data).
@@ -175,6 +202,10 @@ pub enum GnssFormat {
     Rinex(RinexGnss),
     /// PX4 ULog `vehicle_gps_position` / `sensor_gps`, topic instance `multi_id`.
     Ulog { multi_id: u8 },
+    /// NMEA 0183 log (GGA, RMC, VTG, GST, GSA; nmea.rs).
+    Nmea(crate::nmea::NmeaOptions),
+    /// Generic CSV with declared columns (gnss_csv.rs).
+    Csv(crate::gnss_csv::CsvGnssOptions),
 }
 
 /// How RINEX observations are used.
@@ -353,6 +384,8 @@ pub struct OdometerSource {
 #[derive(Clone, Debug, PartialEq)]
 pub struct HeadingSource {
     pub path: PathBuf,
+    /// Some: an NMEA log (HDT, THS mode A; nmea.rs) instead of the 3-column text.
+    pub nmea: Option<crate::nmea::NmeaOptions>,
 }
 
 /// The aiding inputs on the IMU time scale that need no week alignment, read and

@@ -17,7 +17,7 @@
 //! without records (or a pulse file with one record) gives an empty list.
 
 use crate::error::InputError;
-use crate::fmt::{after_record, field, is_comment_line, parse_f64, split_fields, LineReader};
+use crate::fmt::{after_record, field, parse_f64, split_fields, LineReader};
 use crate::input::{OdometerFormat, OdometerSource};
 use navfuse_core::OdometerSample;
 
@@ -65,10 +65,11 @@ fn read(
     let mut out = Vec::new();
     // previous record: time, cumulative pulses (pulse formats)
     let mut prev: Option<(f64, f64)> = None;
+    let mut header = crate::fmt::SkipLines::default();
     while let Some((ln, text)) = lines.next_line()? {
         let mut record = || -> Result<(), InputError> {
             split_fields(text, &mut fields);
-            if is_comment_line(text, &fields) {
+            if header.skip(text, &fields) {
                 return Ok(());
             }
             if fields.len() != ncols {

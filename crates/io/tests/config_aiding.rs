@@ -652,7 +652,8 @@ fn heading_and_zupt() {
         &h("format = \"nmea\""),
         "heading.format",
         "format",
-        "unknown field",
+        // heading.format exists (NMEA heading), but only with heading.file.
+        "applies only with heading.file",
     );
 
     let z = |body: &str| format!("[zupt]\n{body}");

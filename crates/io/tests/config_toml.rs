@@ -782,3 +782,70 @@ fn converts_into_input_error() {
     assert_eq!((i.line, i.field.as_deref()), (e.line, e.key.as_deref()));
     assert_eq!(i.to_string(), shown.replace("key '", "field '"));
 }
+
+fn load_extra(extra: &str) -> Result<RunConfig, String> {
+    let p = Path::new(env!("CARGO_TARGET_TMPDIR")).join("run.toml");
+    parse_toml_str(&format!("{MINIMAL}{extra}"), &p).map_err(|e| e.to_string())
+}
+
+/// MINIMAL plus `extra`: load, write back, load again: the same configuration.
+fn round_trip_extra(extra: &str) -> RunConfig {
+    let c = load_extra(extra).unwrap();
+    let p = Path::new(env!("CARGO_TARGET_TMPDIR")).join("run.toml");
+    let again = parse_toml_str(&c.to_toml_string(), &p).unwrap();
+    assert_eq!(again.gnss, c.gnss);
+    assert_eq!(again.heading, c.heading);
+    c
+}
+
+#[test]
+fn config_keys_nmea_csv_and_heading() {
+    let c = round_trip_extra(
+        "[gnss]\nfile = \"r.nmea\"\nformat = \"nmea\"\ndate = \"2025-07-08\"\nposition_std_m = [1, 1, 2]\n\
+         [heading]\nfile = \"r.nmea\"\nformat = \"nmea\"\nbaseline_m = [1, 0, 0]\n",
+    );
+    let g = c.gnss.unwrap();
+    assert_eq!(
+        g.format,
+        GnssFormat::Nmea(navfuse_io::nmea::NmeaOptions {
+            date: Some((2025, 7, 8)),
+            position_std_m: Some([1.0, 1.0, 2.0]),
+        })
+    );
+    // The NMEA reader's fallback, not an override of GST.
+    assert_eq!(c.nav.gnss.position_std_override, None);
+    assert!(c.heading.unwrap().nmea.is_some());
+
+    let c = round_trip_extra(
+        "[gnss]\nfile = \"f.csv\"\nformat = \"csv\"\nposition_std_m = 2.0\n\
+         [gnss.csv]\ntime_col = 1\nweek_col = 0\necef_cols = [2, 3, 4]\ndelimiter = \";\"\nskip_lines = 1\n",
+    );
+    let GnssFormat::Csv(o) = c.gnss.unwrap().format else {
+        panic!()
+    };
+    assert_eq!(
+        o.position,
+        navfuse_io::gnss_csv::CsvPosition::Ecef([2, 3, 4])
+    );
+    assert_eq!(
+        (o.week_col, o.delimiter, o.skip_lines),
+        (Some(0), Some(b';'), Some(1))
+    );
+
+    for (extra, key) in [
+        ("[gnss]\nfile = \"f.csv\"\nformat = \"csv\"\n", "gnss.csv"),
+        (
+            "[gnss]\nfile = \"f.csv\"\nformat = \"csv\"\n[gnss.csv]\ntime_col = 0\nlla_cols = [1, 2, 3]\n",
+            "gnss.csv.pos_std_cols",
+        ),
+        (
+            "[gnss]\nfile = \"f.csv\"\nformat = \"csv\"\nposition_std_m = 1\n[gnss.csv]\ntime_col = 1\nlla_cols = [1, 2, 3]\n",
+            "gnss.csv",
+        ),
+        ("[gnss]\nfile = \"f.txt\"\nformat = \"kf-gins\"\ndate = \"2025-01-01\"\n", "gnss.date"),
+        ("[gnss]\nfile = \"f.nmea\"\nformat = \"nmea\"\ndate = \"2025-02-30\"\n", "gnss.date"),
+    ] {
+        let e = load_extra(extra).unwrap_err();
+        assert!(e.contains(key), "{key}: {e}");
+    }
+}

@@ -147,6 +147,33 @@ fn gnss_pos(p: &Path) -> Result<(), String> {
     check_gnss(p, GnssFormat::RtklibPos { quality: vec![] })
 }
 
+fn gnss_nmea(p: &Path) -> Result<(), String> {
+    let o = navfuse_io::nmea::NmeaOptions::default();
+    if let Ok(d) = navfuse_io::nmea::read_nmea(p, &o) {
+        let mut prev = None;
+        for h in &d.heading {
+            increasing("NMEA heading time", &mut prev, h.t)?;
+            finite("NMEA heading", h.heading_rad)?;
+        }
+    }
+    check_gnss(p, GnssFormat::Nmea(o))
+}
+
+fn gnss_csv(p: &Path) -> Result<(), String> {
+    use navfuse_io::gnss_csv::{CsvGnssOptions, CsvTimeScale};
+    let mut o = CsvGnssOptions::lla(0, [1, 2, 3]);
+    o.time_scale = CsvTimeScale::IsoUtc;
+    o.pos_std_cols = Some([4, 5, 6]);
+    o.vel_cols = Some([7, 8, 9]);
+    o.velocity_std_mps = Some([0.1, 0.1, 0.3]);
+    check_gnss(p, GnssFormat::Csv(o.clone()))?;
+    // The same file read as plain numbers (a non-ISO time column is a header or an
+    // error) with ECEF columns.
+    o.time_scale = CsvTimeScale::GpstUnix;
+    o.position = navfuse_io::gnss_csv::CsvPosition::Ecef([1, 2, 3]);
+    check_gnss(p, GnssFormat::Csv(o))
+}
+
 fn heading(p: &Path) -> Result<(), String> {
     let Ok(h) = navfuse_io::heading::read_heading(p) else {
         return Ok(());
@@ -405,6 +432,8 @@ fn targets() -> Vec<Target> {
         t("csv_imu", "csv", &[&format!("{f}demo_imu.csv")], csv_imu),
         t("gnss_kfgins", "txt", &[&format!("{f}kfgins_gnss.txt")], gnss_kfgins),
         t("gnss_pos", "pos", &[&format!("{f}demo.pos")], gnss_pos),
+        t("gnss_nmea", "nmea", &[&format!("{f}gnss.nmea")], gnss_nmea),
+        t("gnss_csv", "csv", &[&format!("{f}gnss.csv")], gnss_csv),
         inline(
             "heading",
             "txt",

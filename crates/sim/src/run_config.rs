@@ -193,6 +193,7 @@ pub fn run_config(sc: &Scenario, dir: &Path) -> RunConfig {
             nav.heading.baseline_b = Some(Vector3::from(h.baseline_m));
             heading = Some(HeadingSource {
                 path: dir.join("heading.txt"),
+                nmea: None,
             });
         }
     }

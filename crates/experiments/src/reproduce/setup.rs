@@ -194,5 +194,6 @@ pub(crate) fn seed000_start(cfg: &mut RunConfig, sc: &Scenario) {
 pub(crate) fn heading_source(gnss_path: &Path) -> navfuse_io::input::HeadingSource {
     navfuse_io::input::HeadingSource {
         path: gnss_path.with_file_name("heading.txt"),
+        nmea: None,
     }
 }

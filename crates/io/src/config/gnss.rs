@@ -9,6 +9,7 @@ use navfuse_core::sat::System;
 use serde::{Deserialize, Serialize};
 
 use super::error::{kerr, KResult};
+use super::gnss_text::{self, TGnssCsv};
 use super::outages::{self, TOutageEvery};
 use super::paths::{file_key, PathWriter};
 use super::rinex;
@@ -31,6 +32,10 @@ pub(super) enum TGnssFormat {
     Rinex,
     #[serde(rename = "ulog")]
     Ulog,
+    #[serde(rename = "nmea")]
+    Nmea,
+    #[serde(rename = "csv")]
+    Csv,
 }
 
 /// `gnss.fusion`. A raw type: `GnssFusion::SixState` carries `gnss.six_state_every`.
@@ -125,6 +130,10 @@ pub(super) struct TGnss {
     pub(super) fusion: Option<TFusion>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) six_state_every: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) date: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) csv: Option<TGnssCsv>,
 }
 
 impl TGnss {
@@ -172,6 +181,8 @@ impl TGnss {
             outage_every: None,
             fusion: None,
             six_state_every: None,
+            date: None,
+            csv: None,
         }
     }
 }
@@ -210,18 +221,62 @@ pub(super) fn convert(
             "applies only to gnss.format = \"ulog\"",
         ));
     }
+    for (key, set, fmt) in [
+        ("gnss.date", g.date.is_some(), TGnssFormat::Nmea),
+        ("gnss.csv", g.csv.is_some(), TGnssFormat::Csv),
+    ] {
+        if set && g.format != fmt {
+            let name = if fmt == TGnssFormat::Nmea {
+                "nmea"
+            } else {
+                "csv"
+            };
+            return Err(kerr(
+                key,
+                format!("applies only to gnss.format = \"{name}\""),
+            ));
+        }
+    }
+    if g.quality.is_some() && matches!(g.format, TGnssFormat::Nmea | TGnssFormat::Csv | TGnssFormat::Ulog) {
+        return Err(kerr(
+            "gnss.quality",
+            "applies only to gnss.format = \"rtklib-pos\"",
+        ));
+    }
+    let mut position_std_override = g
+        .position_std_m
+        .as_ref()
+        .map(|v| std3("gnss.position_std_m", v))
+        .transpose()?;
+    let mut velocity_std_override = g
+        .velocity_std_mps
+        .as_ref()
+        .map(|v| std3("gnss.velocity_std_mps", v))
+        .transpose()?;
     let mut tight = TightOptions::default();
     let format = match g.format {
-        TGnssFormat::Ulog => {
-            if g.quality.is_some() {
-                return Err(kerr(
-                    "gnss.quality",
-                    "applies only to gnss.format = \"rtklib-pos\"",
-                ));
-            }
-            GnssFormat::Ulog {
-                multi_id: g.ulog_instance.unwrap_or(0),
-            }
+        TGnssFormat::Ulog => GnssFormat::Ulog {
+            multi_id: g.ulog_instance.unwrap_or(0),
+        },
+        // The NMEA and CSV readers take the stds as their fallback (module doc of
+        // gnss_text.rs), so they are not overrides there.
+        TGnssFormat::Nmea => GnssFormat::Nmea(gnss_text::nmea(
+            "gnss.date",
+            g.date.as_deref(),
+            position_std_override.take(),
+        )?),
+        TGnssFormat::Csv => {
+            let c = g.csv.as_ref().ok_or_else(|| {
+                kerr(
+                    "gnss.csv",
+                    "missing: gnss.format = \"csv\" needs a [gnss.csv] table declaring the columns",
+                )
+            })?;
+            GnssFormat::Csv(gnss_text::csv(
+                c,
+                position_std_override.take(),
+                velocity_std_override.take(),
+            )?)
         }
         TGnssFormat::KfGins => {
             if g.quality.is_some() {
@@ -271,16 +326,8 @@ pub(super) fn convert(
         Some(v) => vec3(v3("gnss.lever_arm_m", v)?),
         None => d.lever_arm_b,
     };
-    let position_std_override = g
-        .position_std_m
-        .as_ref()
-        .map(|v| std3("gnss.position_std_m", v).map(vec3))
-        .transpose()?;
-    let velocity_std_override = g
-        .velocity_std_mps
-        .as_ref()
-        .map(|v| std3("gnss.velocity_std_mps", v).map(vec3))
-        .transpose()?;
+    let position_std_override = position_std_override.map(vec3);
+    let velocity_std_override = velocity_std_override.map(vec3);
     let gate_probability = gate(
         "gnss.gate_probability",
         g.gate_probability,
@@ -430,6 +477,8 @@ pub(super) fn to_toml(
         GnssFormat::RtklibPos { quality } => (TGnssFormat::RtklibPos, Some(quality.clone())),
         GnssFormat::Rinex(_) => (TGnssFormat::Rinex, None),
         GnssFormat::Ulog { .. } => (TGnssFormat::Ulog, None),
+        GnssFormat::Nmea(_) => (TGnssFormat::Nmea, None),
+        GnssFormat::Csv(_) => (TGnssFormat::Csv, None),
     };
     let (outages, outage_every) = outages::to_toml(&go.outages, relative);
     let mut t = TGnss {
@@ -472,6 +521,18 @@ pub(super) fn to_toml(
         },
         ..TGnss::no_rinex()
     };
+    match &g.format {
+        GnssFormat::Nmea(o) => {
+            t.date = gnss_text::nmea_date_to_toml(o);
+            t.position_std_m = o.position_std_m.map(Num3::from3);
+        }
+        GnssFormat::Csv(o) => {
+            t.csv = Some(gnss_text::csv_to_toml(o));
+            t.position_std_m = o.position_std_m.map(Num3::from3);
+            t.velocity_std_mps = o.velocity_std_mps.map(Num3::from3);
+        }
+        _ => {}
+    }
     if let GnssFormat::Rinex(r) = &g.format {
         rinex::to_toml(r, tight, &mut t, w);
         t.systems = Some(go.systems.iter().map(|s| s.letter().to_string()).collect());

@@ -19,6 +19,11 @@ use crate::input::HeadingSource;
 pub(super) struct THeading {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) file: Option<String>,
+    /// `"text"` (3 columns, the default) or `"nmea"` (HDT, THS).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) format: Option<THeadingFormat>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) date: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) baseline_m: Option<Vec<f64>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -31,6 +36,14 @@ pub(super) struct THeading {
     pub(super) course_std_floor_deg: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) gate_probability: Option<Gate>,
+}
+
+/// `heading.format`.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub(super) enum THeadingFormat {
+    Text,
+    Nmea,
 }
 
 pub(super) fn convert(
@@ -61,12 +74,32 @@ pub(super) fn convert(
                         .map_err(|m| kerr("heading.std_deg", m))
                 })
                 .transpose()?;
-            (Some(HeadingSource { path }), Some(vec3(b)), std_override)
+            let nmea = match h.format.unwrap_or(THeadingFormat::Text) {
+                THeadingFormat::Nmea => Some(super::gnss_text::nmea(
+                    "heading.date",
+                    h.date.as_deref(),
+                    None,
+                )?),
+                THeadingFormat::Text if h.date.is_some() => {
+                    return Err(kerr(
+                        "heading.date",
+                        "applies only to heading.format = \"nmea\"",
+                    ))
+                }
+                THeadingFormat::Text => None,
+            };
+            (
+                Some(HeadingSource { path, nmea }),
+                Some(vec3(b)),
+                std_override,
+            )
         }
         None => {
             for (key, given) in [
                 ("heading.baseline_m", h.baseline_m.is_some()),
                 ("heading.std_deg", h.std_deg.is_some()),
+                ("heading.format", h.format.is_some()),
+                ("heading.date", h.date.is_some()),
             ] {
                 if given {
                     return Err(kerr(
@@ -113,6 +146,12 @@ pub(super) fn to_toml(
     let dual = src.filter(|_| hd.baseline_b.is_some());
     THeading {
         file: dual.map(|h| w.path(&h.path)),
+        format: dual
+            .and_then(|h| h.nmea.as_ref())
+            .map(|_| THeadingFormat::Nmea),
+        date: dual
+            .and_then(|h| h.nmea.as_ref())
+            .and_then(super::gnss_text::nmea_date_to_toml),
         baseline_m: dual.and(hd.baseline_b).map(|b| arr3(&b).to_vec()),
         std_deg: dual.and(hd.dual_antenna_std_override).map(|x| DEG.user(x)),
         course_over_ground: Some(hd.course_over_ground),

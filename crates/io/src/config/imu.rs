@@ -6,6 +6,7 @@ use serde::{Deserialize, Serialize};
 
 use super::error::{kerr, KResult};
 use super::imu_csv::{self, TCsv};
+use super::imu_files::{self, TImuFiles};
 use super::paths::{file_key, PathWriter};
 use super::validate::{finite, positive, v3};
 use crate::input::{GapPolicy, ImuFormat, ImuSource, RtklibExplorerImuOptions};
@@ -27,7 +28,10 @@ pub(super) enum TImuFormat {
 #[derive(Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct TImu {
+    #[serde(default, skip_serializing_if = "String::is_empty")]
     pub(super) file: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) files: Option<TImuFiles>,
     pub(super) format: TImuFormat,
     pub(super) rate_hz: f64,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -57,7 +61,19 @@ pub(super) enum TGapPolicy {
 }
 
 pub(super) fn convert(m: &TImu, base: &Path) -> KResult<ImuSource> {
-    let path = file_key(base, "imu.file", &m.file)?;
+    let path = match &m.files {
+        Some(_) if !m.file.is_empty() => {
+            return Err(kerr(
+                "imu.files",
+                "expected imu.file (one file) or imu.files (several), not both",
+            ))
+        }
+        Some(_) if m.format != TImuFormat::Csv => {
+            return Err(kerr("imu.files", "applies only to imu.format = \"csv\""))
+        }
+        Some(f) => file_key(base, "imu.files.time", &f.time)?,
+        None => file_key(base, "imu.file", &m.file)?,
+    };
     let rate_hz = positive("imu.rate_hz", m.rate_hz)?;
     let sensor_to_body_rpy_deg = match &m.sensor_to_body_rpy_deg {
         Some(v) => v3("imu.sensor_to_body_rpy_deg", v)?,
@@ -111,7 +127,10 @@ pub(super) fn convert(m: &TImu, base: &Path) -> KResult<ImuSource> {
                      imu.format = \"csv\"",
                 )
             })?;
-            ImuFormat::Csv(imu_csv::convert(c)?)
+            match &m.files {
+                Some(f) => ImuFormat::CsvFiles(Box::new(imu_files::convert(f, c, base)?)),
+                None => ImuFormat::Csv(imu_csv::convert(c)?),
+            }
         }
         TImuFormat::RtklibExplorer => {
             let tag_path = match &m.tag_file {
@@ -136,7 +155,13 @@ pub(super) fn convert(m: &TImu, base: &Path) -> KResult<ImuSource> {
 }
 
 pub(super) fn to_toml(m: &ImuSource, w: &PathWriter) -> TImu {
+    let mut files = None;
     let (format, tag_file, csv) = match &m.format {
+        ImuFormat::CsvFiles(f) => {
+            let (fl, c) = imu_files::to_toml(f, w);
+            files = Some(fl);
+            (TImuFormat::Csv, None, Some(c))
+        }
         ImuFormat::KfGins => (TImuFormat::KfGins, None, None),
         ImuFormat::Ulog { .. } => (TImuFormat::Ulog, None, None),
         ImuFormat::RtklibExplorer(o) => {
@@ -145,7 +170,12 @@ pub(super) fn to_toml(m: &ImuSource, w: &PathWriter) -> TImu {
         ImuFormat::Csv(o) => (TImuFormat::Csv, None, Some(imu_csv::to_toml(o))),
     };
     TImu {
-        file: w.path(&m.path),
+        file: if files.is_some() {
+            String::new()
+        } else {
+            w.path(&m.path)
+        },
+        files,
         format,
         rate_hz: m.rate_hz,
         sensor_to_body_rpy_deg: Some(m.sensor_to_body_rpy_deg.to_vec()),

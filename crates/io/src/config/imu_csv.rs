@@ -30,7 +30,7 @@ pub(super) struct TCsv {
     pub(super) accel_unit: Option<AccelUnit>,
 }
 
-fn cols3(key: &str, v: &[usize]) -> KResult<[usize; 3]> {
+pub(super) fn cols3(key: &str, v: &[usize]) -> KResult<[usize; 3]> {
     if v.len() != 3 {
         return Err(kerr(
             key,
@@ -44,8 +44,8 @@ fn cols3(key: &str, v: &[usize]) -> KResult<[usize; 3]> {
 }
 
 pub(super) fn convert(c: &TCsv) -> KResult<CsvImuOptions> {
-    let gyro_cols = cols3("imu.csv.gyro_cols", &c.gyro_cols)?;
-    let accel_cols = cols3("imu.csv.accel_cols", &c.accel_cols)?;
+    let o = convert_units(c)?;
+    let (gyro_cols, accel_cols) = (o.gyro_cols, o.accel_cols);
     let mut all = vec![("imu.csv.time_col", c.time_col)];
     all.extend(gyro_cols.iter().map(|&x| ("imu.csv.gyro_cols", x)));
     all.extend(accel_cols.iter().map(|&x| ("imu.csv.accel_cols", x)));
@@ -57,6 +57,13 @@ pub(super) fn convert(c: &TCsv) -> KResult<CsvImuOptions> {
             ));
         }
     }
+    Ok(o)
+}
+
+/// `[imu.csv]` without the check that the columns are distinct (several files).
+pub(super) fn convert_units(c: &TCsv) -> KResult<CsvImuOptions> {
+    let gyro_cols = cols3("imu.csv.gyro_cols", &c.gyro_cols)?;
+    let accel_cols = cols3("imu.csv.accel_cols", &c.accel_cols)?;
     let d = CsvImuOptions::default();
     Ok(CsvImuOptions {
         skip_lines: c.skip_lines.unwrap_or(d.skip_lines),

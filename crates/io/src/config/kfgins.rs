@@ -183,6 +183,7 @@ pub(super) fn kfgins_to_raw(y: KfYaml, w: &mut Vec<String>) -> KResult<(TomlRoot
             max_bridge_s: None,
             csv: None,
             ulog_instance: None,
+            files: None,
         },
         gnss: Some(TGnss {
             file: y.gnsspath,

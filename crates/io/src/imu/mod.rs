@@ -39,6 +39,7 @@ use navfuse_core::attitude::c_bn_from_euler;
 use navfuse_core::ImuSample;
 use std::path::PathBuf;
 
+mod join;
 mod parse;
 mod report;
 #[cfg(test)]
@@ -110,7 +111,12 @@ pub fn open_imu(src: &ImuSource) -> Result<ImuReader, InputError> {
         crate::error::check_scale("max_bridge_s", m, m)
             .map_err(|m| InputError::new(path, m).with_field("max_bridge_s"))?;
     }
-    let lines = LineReader::open(path)?;
+    let lines = match &src.format {
+        ImuFormat::CsvFiles(f) => {
+            LineReader::from_reader(path, Box::new(std::io::Cursor::new(join::join(f)?)))
+        }
+        _ => LineReader::open(path)?,
+    };
     let mut ulog_warnings = Vec::new();
     let nominal_dt = 1.0 / rate_hz;
     let mut gps_week = None;
@@ -125,6 +131,29 @@ pub fn open_imu(src: &ImuSource) -> Result<ImuReader, InputError> {
                 }
             }
             (Kind::Csv(Box::new(k)), o.quantity, o.rate_sampling)
+        }
+        ImuFormat::CsvFiles(f) => {
+            if f.csv.time_scale == TimeScale::GpstUnix {
+                return Err(InputError::new(
+                    path,
+                    "time_scale \"gpst_unix\" is not supported with several IMU files yet: \
+                     expected \"gps_sow\"",
+                )
+                .with_field("time_scale"));
+            }
+            // The joined layout: t, gyro x y z, accel x y z.
+            let o = crate::input::CsvImuOptions {
+                skip_lines: 0,
+                time_col: 0,
+                gyro_cols: [1, 2, 3],
+                accel_cols: [4, 5, 6],
+                ..f.csv.clone()
+            };
+            (
+                Kind::Csv(Box::new(csv_kind(&o))),
+                o.quantity,
+                o.rate_sampling,
+            )
         }
         ImuFormat::RtklibExplorer(o) => {
             let tag = read_timetag(&o.tag_path)?;
