@@ -26,5 +26,6 @@ pub mod table;
 pub mod time;
 pub mod timetag;
 pub mod trajectory;
+pub mod ubx;
 
 pub use error::InputError;
