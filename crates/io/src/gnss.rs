@@ -9,7 +9,7 @@ use crate::error::InputError;
 use crate::fmt::{
     field, for_each_line, is_comment_line, parse_f64, split_fields, LineError, LineReader,
 };
-use crate::input::{GnssFormat, GnssSource};
+use crate::input::{GnssFormat, GnssSource, UbxGnss};
 use crate::time::{calendar_to_week_sow, Calendar, SECONDS_PER_WEEK};
 use nalgebra::Vector3;
 use navfuse_core::GnssFix;
@@ -67,17 +67,18 @@ pub fn read_gnss(src: &GnssSource) -> Result<GnssData, InputError> {
     let (epochs, gps_week) = match &src.format {
         GnssFormat::KfGins => (read_kfgins(path, src.time_offset_s, &mut warnings)?, None),
         GnssFormat::RtklibPos { .. } => read_pos(path, src.time_offset_s, &mut warnings)?,
-        GnssFormat::Rinex(_) => {
+        GnssFormat::Rinex(_) | GnssFormat::Ubx(UbxGnss::Raw(_)) => {
             return Err(InputError::new(
                 path,
                 "RINEX observations are not receiver fixes: they go through the GNSS layer (navfuse run does this)",
             )
             .with_field("format"))
         }
+        GnssFormat::Ubx(UbxGnss::Pvt) => read_ubx_pvt(path, src.time_offset_s, &mut warnings)?,
     };
     let quality: &[u8] = match &src.format {
         GnssFormat::RtklibPos { quality } => quality,
-        GnssFormat::KfGins | GnssFormat::Rinex(_) => &[],
+        GnssFormat::KfGins | GnssFormat::Rinex(_) | GnssFormat::Ubx(_) => &[],
     };
     let mut fixes = Vec::with_capacity(epochs.len());
     let mut skipped = 0;
@@ -103,6 +104,35 @@ pub fn read_gnss(src: &GnssSource) -> Result<GnssData, InputError> {
         skipped,
         warnings,
     })
+}
+
+/// The NAV-PVT fixes of a UBX log (crate::ubx), with the log's week.
+fn read_ubx_pvt(
+    path: &Path,
+    offset: f64,
+    warnings: &mut Vec<String>,
+) -> Result<(Vec<Epoch>, Option<u32>), InputError> {
+    let log = crate::ubx::read_ubx(path)?;
+    warnings.extend(log.warnings.iter().cloned());
+    if log.fixes.is_empty() {
+        return Err(InputError::new(
+            path,
+            format!("no valid NAV-PVT fix ({})", log.summary()),
+        ));
+    }
+    let epochs = log
+        .fixes
+        .iter()
+        .map(|f| Epoch {
+            t_file: f.t,
+            quality: None,
+            fix: GnssFix {
+                t: f.t + offset,
+                ..*f
+            },
+        })
+        .collect();
+    Ok((epochs, log.fix_week.and_then(|w| u32::try_from(w).ok())))
 }
 
 /// Field reader bound to one line.

@@ -39,6 +39,7 @@ mod spoofing;
 mod tight;
 mod time;
 mod time_offset;
+mod ubx;
 pub mod units;
 mod validate;
 mod values;
