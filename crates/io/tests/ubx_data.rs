@@ -262,3 +262,67 @@ fn damaged_real_log() {
         .iter()
         .all(|s| s.sat.system != System::Glonass || s.sat.prn > 0)));
 }
+
+/// The fuzz seed (tests/data/fuzz/walk_0827_cut.ubx: 3 RAWX, 3 NAV-PVT, G32's
+/// subframes 1-3, one Galileo page and an NMEA sentence from the walk log).
+fn seed() -> Vec<u8> {
+    std::fs::read(
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz/walk_0827_cut.ubx"),
+    )
+    .unwrap()
+}
+
+#[test]
+fn seed_cut_decodes() {
+    let log = decode_ubx(&seed(), "seed");
+    assert_eq!(log.epochs.len(), 3);
+    assert_eq!(log.fixes.len(), 3);
+    assert_eq!(log.nav.gps.len(), 1);
+    assert_eq!(log.nav.gps[0].prn, 32);
+    assert_eq!(log.sfrbx.not_decoded, 1);
+    assert!(log.warnings.is_empty(), "{:?}", log.warnings);
+    assert!(log.scan.skipped_bytes > 50);
+}
+
+/// Garbage, a checksum error and a truncated last frame: counted and warned with
+/// byte offsets; the intact frames are read.
+#[test]
+fn bad_input_is_counted_with_offsets() {
+    let good = seed();
+    let mut d = b"garbage \xB5\x62 not a frame".to_vec();
+    let g = d.len();
+    d.extend_from_slice(&good);
+    // Damage the first frame's payload (the first RAWX): checksum error at byte g.
+    d[g + 20] ^= 0x01;
+    // Cut the last frame short.
+    d.truncate(d.len() - 5);
+    let log = decode_ubx(&d, "bad");
+    for w in &log.warnings {
+        eprintln!("{w}");
+    }
+    assert_eq!(log.scan.bad_checksums, vec![g]);
+    assert!(log
+        .warnings
+        .iter()
+        .any(|w| w.contains(&format!("byte {g}: UBX checksum error"))));
+    assert!(log.warnings.iter().any(|w| w.contains("truncated")));
+    assert_eq!(log.epochs.len(), 2);
+    assert_eq!(log.fixes.len(), 3);
+    // A RAWX whose numMeas does not match its length: skipped with its offset.
+    let mut p = vec![0u8; 16 + 32];
+    p[8] = 0x4D; // week 2381
+    p[9] = 0x09;
+    p[11] = 2; // says 2 measurements, carries 1
+    let mut f = vec![0xB5, 0x62, 0x02, 0x15];
+    f.extend_from_slice(&(p.len() as u16).to_le_bytes());
+    f.extend_from_slice(&p);
+    let (a, b) = navfuse_io::ubx::frame::checksum(&f[2..]);
+    f.extend_from_slice(&[a, b]);
+    let log = decode_ubx(&f, "short");
+    assert!(
+        log.warnings[0].starts_with("short: byte 0: RXM-RAWX: numMeas 2"),
+        "{:?}",
+        log.warnings
+    );
+    assert!(log.epochs.is_empty());
+}
