@@ -60,14 +60,55 @@ pub fn load_rinex(
     r: &RinexGnss,
     systems: &[System],
 ) -> Result<RinexInput, Error> {
-    let systems = systems.to_vec();
     let nav = read_rinex_nav(&r.nav_path)?;
+    let obs = read_rinex_obs_all(&src.path)?;
+    prepare_observations(
+        src,
+        r,
+        systems,
+        ReadObservations {
+            nav_name: r.nav_path.display().to_string(),
+            nav,
+            header: obs.header,
+            epochs: obs.epochs,
+            warnings: obs.warnings,
+        },
+    )
+}
+
+/// Observations and navigation records as a reader gave them (RINEX files, a UBX
+/// log): what [`prepare_observations`] turns into fixes and tight epochs.
+pub struct ReadObservations {
+    /// The navigation source, for messages.
+    pub nav_name: String,
+    pub nav: navfuse_io::rinex_nav::RinexNav,
+    pub header: navfuse_gnss::obs::ObsSignalsHeader,
+    pub epochs: Vec<navfuse_gnss::MultiObsEpoch>,
+    /// The observation reader's warnings.
+    pub warnings: Vec<String>,
+}
+
+/// Prepare every epoch of `read` for the systems `systems` with the settings `r`
+/// (its `nav_path` is not read here), orbits and DGPS as configured.
+pub fn prepare_observations(
+    src: &GnssSource,
+    r: &RinexGnss,
+    systems: &[System],
+    read: ReadObservations,
+) -> Result<RinexInput, Error> {
+    let systems = systems.to_vec();
+    let ReadObservations {
+        nav_name,
+        nav,
+        header,
+        epochs,
+        warnings: obs_warnings,
+    } = read;
     let broadcast = nav.store();
     let counts = broadcast.counts();
     if !systems.iter().any(|s| counts.contains_key(s)) {
         return Err(Error::Other(format!(
-            "{}: no ephemerides of {}",
-            r.nav_path.display(),
+            "{nav_name}: no ephemerides of {}",
             systems
                 .iter()
                 .map(|s| s.name())
@@ -89,8 +130,7 @@ pub fn load_rinex(
     for sys in &systems {
         if !counts.contains_key(sys) {
             warnings.push(format!(
-                "{}: no {} ephemerides: its satellites are not used",
-                r.nav_path.display(),
+                "{nav_name}: no {} ephemerides: its satellites are not used",
                 sys.name()
             ));
         }
@@ -100,10 +140,8 @@ pub fn load_rinex(
         codes: r.signals.clone(),
         dual_frequency: r.dual_frequency,
     };
-    let obs = read_rinex_obs_all(&src.path)?;
-    warnings.extend(nav.warnings.iter().chain(&obs.warnings).cloned());
-    let channels = crate::spp::glonass_channels(&obs.header, orbits.broadcast());
-    let epochs = obs.epochs;
+    warnings.extend(nav.warnings.iter().chain(&obs_warnings).cloned());
+    let channels = crate::spp::glonass_channels(&header, orbits.broadcast());
     let Some(week) = epochs.first().map(|e| e.t.week) else {
         return Err(Error::Other(format!(
             "{}: no observation epochs",

@@ -10,7 +10,7 @@ use navfuse_io::config::RunConfig;
 use navfuse_io::gnss::read_gnss;
 use navfuse_io::heading::read_heading_report;
 use navfuse_io::imu::{open_imu, ImuReader};
-use navfuse_io::input::{Coupling, GnssFormat, GnssSource};
+use navfuse_io::input::{Coupling, GnssFormat, GnssSource, UbxGnss};
 use navfuse_io::odometer::read_odometer_report;
 
 /// Seconds in a GPS week.
@@ -50,11 +50,14 @@ pub(crate) fn read(cfg: &RunConfig, job: &mut JobResult, warn: bool) -> Result<I
     let (mut fixes, gnss_week): (Vec<GnssFix>, Option<u32>) = match &cfg.gnss {
         Some(
             src @ GnssSource {
-                format: GnssFormat::Rinex(r),
+                format: GnssFormat::Rinex(r) | GnssFormat::Ubx(UbxGnss::Raw(r)),
                 ..
             },
         ) => {
-            let g = crate::gnss_input::load_rinex(src, r, &cfg.nav.gnss.systems)?;
+            let g = match src.format {
+                GnssFormat::Ubx(_) => crate::ubx_input::load_ubx(src, r, &cfg.nav.gnss.systems)?,
+                _ => crate::gnss_input::load_rinex(src, r, &cfg.nav.gnss.systems)?,
+            };
             input_notes.extend(g.notes);
             reader_warnings.extend(g.warnings);
             match r.coupling {

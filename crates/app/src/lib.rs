@@ -35,6 +35,7 @@ pub mod spp;
 mod stop;
 mod summary;
 mod time_offset;
+pub mod ubx_input;
 
 pub use error::Error;
 pub use export::export_run;

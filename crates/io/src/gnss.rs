@@ -7,7 +7,7 @@
 
 use crate::error::InputError;
 use crate::fmt::{field, for_each_line, parse_f64, split_fields, LineError, LineReader};
-use crate::input::{GnssFormat, GnssSource};
+use crate::input::{GnssFormat, GnssSource, UbxGnss};
 use crate::time::{calendar_to_week_sow, Calendar, SECONDS_PER_WEEK};
 use nalgebra::Vector3;
 use navfuse_core::GnssFix;
@@ -79,13 +79,14 @@ pub fn read_gnss(src: &GnssSource) -> Result<GnssData, InputError> {
             let (fixes, week) = crate::gnss_csv::read_csv_gnss(path, o, &mut warnings)?;
             (as_epochs(fixes, src.time_offset_s), week)
         }
-        GnssFormat::Rinex(_) => {
+        GnssFormat::Rinex(_) | GnssFormat::Ubx(UbxGnss::Raw(_)) => {
             return Err(InputError::new(
                 path,
                 "RINEX observations are not receiver fixes: they go through the GNSS layer (navfuse run does this)",
             )
             .with_field("format"))
         }
+        GnssFormat::Ubx(UbxGnss::Pvt) => read_ubx_pvt(path, src.time_offset_s, &mut warnings)?,
     };
     let quality: &[u8] = match &src.format {
         GnssFormat::RtklibPos { quality } => quality,
@@ -131,6 +132,24 @@ fn as_epochs(fixes: Vec<GnssFix>, offset: f64) -> Vec<Epoch> {
             },
         })
         .collect()
+}
+
+/// The NAV-PVT fixes of a UBX log (crate::ubx), with the log's week.
+fn read_ubx_pvt(
+    path: &Path,
+    offset: f64,
+    warnings: &mut Vec<String>,
+) -> Result<(Vec<Epoch>, Option<u32>), InputError> {
+    let log = crate::ubx::read_ubx(path)?;
+    warnings.extend(log.warnings.iter().cloned());
+    if log.fixes.is_empty() {
+        return Err(InputError::new(
+            path,
+            format!("no valid NAV-PVT fix ({})", log.summary()),
+        ));
+    }
+    let week = log.fix_week.and_then(|w| u32::try_from(w).ok());
+    Ok((as_epochs(log.fixes.clone(), offset), week))
 }
 
 /// Field reader bound to one line.

@@ -206,6 +206,30 @@ pub enum GnssFormat {
     Nmea(crate::nmea::NmeaOptions),
     /// Generic CSV with declared columns (gnss_csv.rs).
     Csv(crate::gnss_csv::CsvGnssOptions),
+    /// u-blox UBX log (docs/FORMATS.md "u-blox UBX").
+    Ubx(UbxGnss),
+}
+
+/// How a UBX log is used (`gnss.ubx_source`).
+#[derive(Clone, Debug, PartialEq)]
+pub enum UbxGnss {
+    /// RXM-RAWX observations with the RXM-SFRBX GPS ephemerides, through the GNSS
+    /// layer as RINEX observations are, with the same settings. The settings'
+    /// `nav_path` is an extra RINEX navigation file whose records are added to the
+    /// decoded ones; empty (`PathBuf::new()`) for none ([`UbxGnss::extra_nav`]).
+    Raw(RinexGnss),
+    /// The receiver's NAV-PVT solutions as fixes (loose coupling).
+    Pvt,
+}
+
+impl UbxGnss {
+    /// The extra RINEX navigation file of a raw source, if one is given.
+    pub fn extra_nav(&self) -> Option<&std::path::Path> {
+        match self {
+            UbxGnss::Raw(r) if !r.nav_path.as_os_str().is_empty() => Some(&r.nav_path),
+            _ => None,
+        }
+    }
 }
 
 /// How RINEX observations are used.

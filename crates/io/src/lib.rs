@@ -28,6 +28,7 @@ pub mod table;
 pub mod time;
 pub mod timetag;
 pub mod trajectory;
+pub mod ubx;
 pub mod ulog;
 
 pub use error::InputError;

@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 use navfuse_core::config::NhcMode;
 use navfuse_io::config::{load, load_toml, parse_toml_str, ConfigError, RunConfig};
 use navfuse_io::input::{
-    AccelUnit, GnssFormat, GyroUnit, ImuFormat, ImuQuantity, OdometerFormat, RateSampling,
-    TimeScale, TimeUnit,
+    AccelUnit, Coupling, GnssFormat, GyroUnit, ImuFormat, ImuQuantity, OdometerFormat,
+    RateSampling, TimeScale, TimeUnit, UbxGnss,
 };
 
 const D2R: f64 = PI / 180.0;
@@ -848,4 +848,80 @@ fn config_keys_nmea_csv_and_heading() {
         let e = load_extra(extra).unwrap_err();
         assert!(e.contains(key), "{key}: {e}");
     }
+}
+
+// `[gnss] format = "ubx"`: the raw and pvt sources, their keys, errors, and the
+// round trip through the config writer.
+
+fn parse_ubx(gnss: &str) -> Result<navfuse_io::config::RunConfig, String> {
+    parse_toml_str(
+        &format!("[gnss]\n{gnss}\n{MINIMAL}"),
+        Path::new("/d/run.toml"),
+    )
+    .map_err(|e| e.to_string())
+}
+
+fn round_trip_gnss(c: &navfuse_io::config::RunConfig) {
+    let text = c.to_toml_string();
+    let back = parse_toml_str(&text, Path::new("/d/run.toml")).unwrap();
+    assert_eq!(back.gnss, c.gnss, "{text}");
+    assert_eq!(back.nav.tight, c.nav.tight);
+}
+
+#[test]
+fn raw_source_takes_the_rinex_keys() {
+    let c = parse_ubx(
+        "file = \"g.ubx\"\nformat = \"ubx\"\ncoupling = \"loose\"\nelevation_mask_deg = 15",
+    )
+    .unwrap();
+    let g = c.gnss.as_ref().unwrap();
+    let GnssFormat::Ubx(u @ UbxGnss::Raw(r)) = &g.format else {
+        panic!("{:?}", g.format)
+    };
+    assert_eq!(r.coupling, Coupling::Loose);
+    assert_eq!(r.elevation_mask_deg, 15.0);
+    assert_eq!(u.extra_nav(), None);
+    assert!(!c.nav.tight.enabled);
+    round_trip_gnss(&c);
+    // Tight by default, with an extra navigation file.
+    let c = parse_ubx("file = \"g.ubx\"\nformat = \"ubx\"\nubx_source = \"raw\"\nnav = \"b.nav\"")
+        .unwrap();
+    let GnssFormat::Ubx(u) = &c.gnss.as_ref().unwrap().format else {
+        panic!()
+    };
+    assert_eq!(
+        u.extra_nav(),
+        Some(std::path::PathBuf::from("/d/b.nav").as_path())
+    );
+    assert!(c.nav.tight.enabled);
+    round_trip_gnss(&c);
+}
+
+#[test]
+fn pvt_source_is_fixes() {
+    let c = parse_ubx("file = \"g.ubx\"\nformat = \"ubx\"\nubx_source = \"pvt\"\ndecimate_s = 1.0")
+        .unwrap();
+    let g = c.gnss.as_ref().unwrap();
+    assert_eq!(g.format, GnssFormat::Ubx(UbxGnss::Pvt));
+    assert!(!c.nav.tight.enabled);
+    round_trip_gnss(&c);
+}
+
+#[test]
+fn ubx_key_errors() {
+    let e =
+        parse_ubx("file = \"g.ubx\"\nformat = \"ubx\"\nubx_source = \"pvt\"\ncoupling = \"tight\"")
+            .unwrap_err();
+    assert!(
+        e.contains("gnss.coupling") && e.contains("ubx_source"),
+        "{e}"
+    );
+    let e =
+        parse_ubx("file = \"g.pos\"\nformat = \"rtklib-pos\"\nubx_source = \"pvt\"").unwrap_err();
+    assert!(
+        e.contains("gnss.ubx_source") && e.contains("applies only to gnss.format = \"ubx\""),
+        "{e}"
+    );
+    let e = parse_ubx("file = \"g.ubx\"\nformat = \"ubx\"\nubx_source = \"nmea\"").unwrap_err();
+    assert!(e.contains("ubx_source") || e.contains("nmea"), "{e}");
 }

@@ -413,6 +413,44 @@ fn config(p: &Path) -> Result<(), String> {
     }
 }
 
+/// UBX: never an error but for an unreadable file; every accepted value finite,
+/// epochs in time order, ephemerides giving finite satellite states, fixes usable.
+fn ubx(p: &Path) -> Result<(), String> {
+    let Ok(log) = navfuse_io::ubx::read_ubx(p) else {
+        return Ok(());
+    };
+    for w in log.epochs.windows(2) {
+        if w[1].t.diff_s(&w[0].t) <= 0.0 {
+            return Err(format!("RAWX epoch {:?} after {:?}", w[1].t, w[0].t));
+        }
+    }
+    for e in &log.epochs {
+        finite("RAWX time", e.t.sow)?;
+        for (code, v) in e.sats.iter().flat_map(|s| &s.signals) {
+            if let Some(x) = v.value {
+                finite(code.as_str(), x)?;
+            }
+        }
+    }
+    for e in &log.nav.gps {
+        let s = e.sat_state(e.toe);
+        for v in s.pos_ecef_m.iter().chain(s.vel_ecef_mps.iter()) {
+            finite(&format!("satellite state of G{:02}", e.prn), *v)?;
+        }
+    }
+    let mut prev = None;
+    for f in &log.fixes {
+        increasing("NAV-PVT time", &mut prev, f.t)?;
+        for v in f.lla.iter() {
+            finite("NAV-PVT position", *v)?;
+        }
+        for v in f.std_ned.iter().chain(f.vel_std_ned.iter().flatten()) {
+            std_ok("NAV-PVT std", *v)?;
+        }
+    }
+    Ok(())
+}
+
 fn targets() -> Vec<Target> {
     let t = |name, ext, seeds: &[&str], check| Target {
         name,
@@ -499,6 +537,7 @@ fn targets() -> Vec<Target> {
             config,
         ),
         t("config_yaml", "yaml", &[&format!("{f}kfgins.yaml")], config),
+        t("ubx", "ubx", &[&format!("{f}walk_0827_cut.ubx")], ubx),
     ]
 }
 

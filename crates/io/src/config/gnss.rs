@@ -36,6 +36,8 @@ pub(super) enum TGnssFormat {
     Nmea,
     #[serde(rename = "csv")]
     Csv,
+    #[serde(rename = "ubx")]
+    Ubx,
 }
 
 /// `gnss.fusion`. A raw type: `GnssFusion::SixState` carries `gnss.six_state_every`.
@@ -51,6 +53,8 @@ pub(super) enum TFusion {
 pub(super) struct TGnss {
     pub(super) file: String,
     pub(super) format: TGnssFormat,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) ubx_source: Option<super::ubx::TUbxSource>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) nav: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -142,6 +146,7 @@ impl TGnss {
         TGnss {
             file: String::new(),
             format: TGnssFormat::KfGins,
+            ubx_source: None,
             nav: None,
             coupling: None,
             range_rate: None,
@@ -193,25 +198,14 @@ pub(super) fn convert(
     start: Option<f64>,
 ) -> KResult<(GnssSource, GnssOptions, Vec<RelativeOutage>, TightOptions)> {
     let path = file_key(base, "gnss.file", &g.file)?;
-    let rinex_only = [
-        ("gnss.nav", g.nav.is_some()),
-        ("gnss.coupling", g.coupling.is_some()),
-        ("gnss.range_rate", g.range_rate.is_some()),
-        ("gnss.elevation_mask_deg", g.elevation_mask_deg.is_some()),
-        ("gnss.fde", g.fde.is_some()),
-        ("gnss.dgps", g.dgps.is_some()),
-        ("gnss.dgps_corrections", g.dgps_corrections.is_some()),
-        ("gnss.dgps_reference_obs", g.dgps_reference_obs.is_some()),
-        (
-            "gnss.dgps_reference_position_deg_m",
-            g.dgps_reference_position_deg_m.is_some(),
-        ),
-        ("gnss.dgps_max_age_s", g.dgps_max_age_s.is_some()),
-        ("gnss.systems", g.systems.is_some()),
-        ("gnss.tight", g.tight.is_some()),
-    ];
-    if g.format != TGnssFormat::Rinex {
-        if let Some((key, _)) = rinex_only.iter().find(|(_, set)| *set) {
+    if g.ubx_source.is_some() && g.format != TGnssFormat::Ubx {
+        return Err(kerr(
+            "gnss.ubx_source",
+            "applies only to gnss.format = \"ubx\"",
+        ));
+    }
+    if !matches!(g.format, TGnssFormat::Rinex | TGnssFormat::Ubx) {
+        if let Some(key) = rinex_key_set(g) {
             return Err(kerr(key, "applies only to gnss.format = \"rinex\""));
         }
     }
@@ -237,7 +231,12 @@ pub(super) fn convert(
             ));
         }
     }
-    if g.quality.is_some() && matches!(g.format, TGnssFormat::Nmea | TGnssFormat::Csv | TGnssFormat::Ulog) {
+    if g.quality.is_some()
+        && matches!(
+            g.format,
+            TGnssFormat::Nmea | TGnssFormat::Csv | TGnssFormat::Ulog
+        )
+    {
         return Err(kerr(
             "gnss.quality",
             "applies only to gnss.format = \"rtklib-pos\"",
@@ -307,6 +306,11 @@ pub(super) fn convert(
             let (rinex, t) = rinex::convert(g, base)?;
             tight = t;
             GnssFormat::Rinex(rinex)
+        }
+        TGnssFormat::Ubx => {
+            let (u, t) = super::ubx::convert(g, base)?;
+            tight = t;
+            GnssFormat::Ubx(u)
         }
     };
     let decimate_s = g
@@ -411,6 +415,30 @@ pub(super) fn convert(
     Ok((src, opts, relative, tight))
 }
 
+/// The first RINEX-only key `g` sets (the keys of raw observations).
+pub(super) fn rinex_key_set(g: &TGnss) -> Option<&'static str> {
+    [
+        ("gnss.nav", g.nav.is_some()),
+        ("gnss.coupling", g.coupling.is_some()),
+        ("gnss.range_rate", g.range_rate.is_some()),
+        ("gnss.elevation_mask_deg", g.elevation_mask_deg.is_some()),
+        ("gnss.fde", g.fde.is_some()),
+        ("gnss.dgps", g.dgps.is_some()),
+        ("gnss.dgps_corrections", g.dgps_corrections.is_some()),
+        ("gnss.dgps_reference_obs", g.dgps_reference_obs.is_some()),
+        (
+            "gnss.dgps_reference_position_deg_m",
+            g.dgps_reference_position_deg_m.is_some(),
+        ),
+        ("gnss.dgps_max_age_s", g.dgps_max_age_s.is_some()),
+        ("gnss.systems", g.systems.is_some()),
+        ("gnss.tight", g.tight.is_some()),
+    ]
+    .into_iter()
+    .find(|(_, set)| *set)
+    .map(|(key, _)| key)
+}
+
 /// `gnss.systems`: RINEX letters, each once, at least one.
 fn convert_systems(letters: &[String]) -> KResult<Vec<System>> {
     let key = "gnss.systems";
@@ -479,6 +507,7 @@ pub(super) fn to_toml(
         GnssFormat::Ulog { .. } => (TGnssFormat::Ulog, None),
         GnssFormat::Nmea(_) => (TGnssFormat::Nmea, None),
         GnssFormat::Csv(_) => (TGnssFormat::Csv, None),
+        GnssFormat::Ubx(_) => (TGnssFormat::Ubx, None),
     };
     let (outages, outage_every) = outages::to_toml(&go.outages, relative);
     let mut t = TGnss {
@@ -536,6 +565,12 @@ pub(super) fn to_toml(
     if let GnssFormat::Rinex(r) = &g.format {
         rinex::to_toml(r, tight, &mut t, w);
         t.systems = Some(go.systems.iter().map(|s| s.letter().to_string()).collect());
+    }
+    if let GnssFormat::Ubx(u) = &g.format {
+        super::ubx::to_toml(u, tight, &mut t, w);
+        if matches!(u, crate::input::UbxGnss::Raw(_)) {
+            t.systems = Some(go.systems.iter().map(|s| s.letter().to_string()).collect());
+        }
     }
     t
 }

@@ -41,6 +41,7 @@ mod spoofing;
 mod tight;
 mod time;
 mod time_offset;
+mod ubx;
 pub mod units;
 mod validate;
 mod values;

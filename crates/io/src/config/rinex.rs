@@ -31,6 +31,16 @@ pub(super) fn convert(g: &TGnss, base: &Path) -> KResult<(RinexGnss, TightOption
         )
     })?;
     let nav_path = file_key(base, "gnss.nav", nav)?;
+    convert_with_nav(g, base, nav_path)
+}
+
+/// The RINEX keys with the navigation file `nav_path` already resolved (ubx.rs
+/// passes an optional one).
+pub(super) fn convert_with_nav(
+    g: &TGnss,
+    base: &Path,
+    nav_path: std::path::PathBuf,
+) -> KResult<(RinexGnss, TightOptions)> {
     // Tight coupling unless asked otherwise: raw observations are what it is for.
     let coupling = g.coupling.unwrap_or(Coupling::Tight);
     let elevation_mask_deg = g.elevation_mask_deg.unwrap_or(DEFAULT_ELEVATION_MASK_DEG);
