@@ -308,3 +308,51 @@ fn find_first(b: &[u8], ty: u8) -> usize {
         pos += 3 + size;
     }
 }
+
+/// Fuzz findings: timestamps beyond i64 (a GPS record's 2^63, an IMU record's
+/// u64::MAX) wrapped the time mapping (times going backwards, an overflow panic).
+#[test]
+fn huge_timestamps_do_not_wrap() {
+    let good = ulog::synth::synthetic_ulog(2);
+    let dir = std::env::temp_dir().join(format!("navfuse-ulog-huge-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (msg_id, ts) in [
+        (1u16, 1u64 << 63),
+        (1, u64::MAX),
+        (0, u64::MAX),
+        (0, (1 << 63) - 1),
+    ] {
+        // The second data record of msg_id: its timestamp follows msg_id.
+        let mut b = good.clone();
+        let mut pos = 16;
+        let mut seen = 0;
+        while pos + 3 < b.len() {
+            let size = u16::from_le_bytes([b[pos], b[pos + 1]]) as usize;
+            if b[pos + 2] == b'D' && u16::from_le_bytes([b[pos + 3], b[pos + 4]]) == msg_id {
+                seen += 1;
+                if seen == 2 {
+                    b[pos + 5..pos + 13].copy_from_slice(&ts.to_le_bytes());
+                    break;
+                }
+            }
+            pos += 3 + size;
+        }
+        let p = dir.join("huge.ulg");
+        std::fs::write(&p, &b).unwrap();
+        if let Ok(g) = read_gnss(&GnssSource {
+            path: p.clone(),
+            format: GnssFormat::Ulog { multi_id: 0 },
+            decimate_s: None,
+            time_offset_s: 0.0,
+        }) {
+            assert!(g.fixes.windows(2).all(|w| w[1].t > w[0].t));
+        }
+        if let Ok(r) = open_imu(&imu_src(p.clone())) {
+            for s in r {
+                if s.is_err() {
+                    break;
+                }
+            }
+        }
+    }
+}

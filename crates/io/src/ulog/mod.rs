@@ -64,7 +64,7 @@ pub struct TimeMap {
     /// GPS week of the times; None: seconds since boot.
     pub week: Option<u32>,
     /// GPS time [µs since the GPS epoch] - boot time [µs], when known.
-    offset_us: Option<i64>,
+    offset_us: Option<i128>,
 }
 
 impl TimeMap {
@@ -85,11 +85,12 @@ impl TimeMap {
         let Some(fu) = t.field("time_utc_usec") else {
             return none;
         };
-        let mut d: Vec<i64> = (0..t.len())
+        // i128 throughout: damaged timestamps may be anywhere in u64.
+        let mut d: Vec<i128> = (0..t.len())
             .filter_map(|k| {
-                let ts = t.timestamp_us(k)? as i64;
+                let ts = t.timestamp_us(k)? as i128;
                 let utc = t.value(k, fu);
-                (utc > 1e15 && utc < 1e17).then(|| utc as i64 - ts)
+                (utc > 1e15 && utc < 1e17).then(|| utc as i128 - ts)
             })
             .collect();
         if d.is_empty() {
@@ -99,22 +100,26 @@ impl TimeMap {
         let utc_minus_boot = d[d.len() / 2];
         // UTC µs since 1970 -> GPS µs since 1980-01-06, with the leap seconds of
         // the week of the first fix (an approximate week first).
-        let epoch_us = navfuse_core::time::GPS_EPOCH_UNIX * 1_000_000;
+        let epoch_us = navfuse_core::time::GPS_EPOCH_UNIX as i128 * 1_000_000;
         let approx = (utc_minus_boot - epoch_us) as f64 * 1e-6 / SECONDS_PER_WEEK;
-        let leap = leap_seconds(Some(approx.max(0.0) as u32));
-        let offset = utc_minus_boot - epoch_us + (leap * 1e6) as i64;
-        let first = t.timestamp_us(0).unwrap_or(0) as i64 + offset;
-        let week = (first.max(0) as f64 * 1e-6 / SECONDS_PER_WEEK).floor() as u32;
+        let leap = leap_seconds(Some(approx.clamp(0.0, 1e6) as u32));
+        let offset = utc_minus_boot - epoch_us + (leap * 1e6) as i128;
+        let first = t.timestamp_us(0).unwrap_or(0) as i128 + offset;
+        let week = (first.max(0) as f64 * 1e-6 / SECONDS_PER_WEEK).floor();
+        if !(0.0..1e6).contains(&week) {
+            return none;
+        }
+        let week = week as u32;
         TimeMap {
             week: Some(week),
-            offset_us: Some(offset - week as i64 * 604_800_000_000),
+            offset_us: Some(offset - week as i128 * 604_800_000_000),
         }
     }
 
     /// Time [s] of boot timestamp `us`.
     pub fn t(&self, us: u64) -> f64 {
         match self.offset_us {
-            Some(o) => (us as i64 + o) as f64 * 1e-6,
+            Some(o) => (us as i128 + o) as f64 * 1e-6,
             None => us as f64 * 1e-6,
         }
     }
