@@ -21,6 +21,7 @@ const CONFIGS: &[&str] = &[
     "examples/kfgins-synthetic.toml",
     "examples/kfgins-synthetic-outages.toml",
     "examples/walk_0827_tight.toml",
+    "examples/px4_sitl.toml",
     "examples/demo/drive_excerpt.toml",
 ];
 
