@@ -30,8 +30,10 @@ loosely coupled GNSS position/velocity; tightly coupled pseudoranges with Dopple
 carrier phase (RINEX 3, broadcast ephemeris, DGPS corrections); heading from course over ground or \
 a dual antenna; odometer, non-holonomic constraint, zero velocity; barometric altitude; a GNSS integrity monitor against \
 spoofing with dead-reckoning fallback.\n\n\
-Inputs: KF-GINS text files, CSV IMU logs, the rtklibexplorer raw IMU log, RTKLIB .pos solutions, RINEX \
-observation and navigation files (tight coupling: GPS; `spp`: GPS, GLONASS, Galileo, BeiDou, QZSS; SP3 and clock files), odometer, heading and barometer logs, DGPS corrections. \
+Inputs: KF-GINS text files, CSV IMU logs (one file or several), the rtklibexplorer raw IMU log, RTKLIB .pos solutions, NMEA \
+0183 and generic CSV fixes, RINEX observation and navigation files of GPS, GLONASS, Galileo, BeiDou and QZSS (SP3 and clock \
+files), u-blox UBX (RXM-RAWX, RXM-SFRBX, NAV-PVT), PX4 ULog (IMU, GPS, barometer; EKF2's estimate for eval), odometer, \
+heading and barometer logs, DGPS corrections. \
 Outputs: KF-GINS .nav / IMU_ERR / STD files, CSV with the solution state, innovations, extra states, the \
 configuration used, events and integrity logs; exports (.pos, NMEA, KML, GeoJSON, GPX); `report` draws an \
 offline HTML page. Formats: docs/FORMATS.md; configuration keys: docs/CONFIG.md."
