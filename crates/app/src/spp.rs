@@ -50,6 +50,29 @@ pub struct SppJob {
     pub cn0_weighting: Option<(f64, f64)>,
 }
 
+impl SppJob {
+    /// `systems` from `obs` with `navs`, RTKLIB's single-mode settings otherwise:
+    /// default signals, broadcast orbits, 10 deg mask, broadcast Klobuchar,
+    /// Saastamoinen, FDE on, navfuse's weights.
+    pub fn new(obs: PathBuf, navs: Vec<PathBuf>, systems: Vec<System>) -> Self {
+        SppJob {
+            obs,
+            navs,
+            systems,
+            signals: Vec::new(),
+            dual_frequency: false,
+            sp3: Vec::new(),
+            clk: Vec::new(),
+            elevation_mask_deg: 10.0,
+            broadcast_iono: true,
+            troposphere: true,
+            fde: true,
+            rtklib_weights: false,
+            cn0_weighting: None,
+        }
+    }
+}
+
 /// The solutions, one per observation epoch, and what the run found.
 #[derive(Clone, Debug)]
 pub struct SppRun {

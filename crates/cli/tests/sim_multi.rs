@@ -266,26 +266,16 @@ fn spp_of_an_error_free_mixed_simulation_finds_the_station_and_the_biases() {
     let zero = "iono_m = 0\ntropo_m = 0\nsat_clock_m = 0\norbit_m = 0\nmultipath_m = 0\n\
                 noise_m = 0\nrx_clock_m = 0\nsa_m = 0\nisb_m = { E = 2.5 }";
     let sim = simulate_with(&dir, "spp", zero);
-    let job = navfuse_app::spp::SppJob {
-        obs: sim.join("obs.rnx"),
-        navs: vec![sim.join("nav.rnx")],
-        systems: vec![
+    let job = navfuse_app::spp::SppJob::new(
+        sim.join("obs.rnx"),
+        vec![sim.join("nav.rnx")],
+        vec![
             System::Gps,
             System::Galileo,
             System::BeiDou,
             System::Glonass,
         ],
-        signals: Vec::new(),
-        dual_frequency: false,
-        sp3: Vec::new(),
-        clk: Vec::new(),
-        elevation_mask_deg: 10.0,
-        broadcast_iono: true,
-        troposphere: true,
-        fde: true,
-        rtklib_weights: false,
-        cn0_weighting: None,
-    };
+    );
     let run = navfuse_app::spp::run_spp(&job).unwrap();
     let rx = lla_to_ecef(&Vector3::new(LAT.to_radians(), LON.to_radians(), H));
     let mut worst: f64 = 0.0;

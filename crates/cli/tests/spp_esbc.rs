@@ -187,21 +187,11 @@ fn esbc_spp_all_systems_with_navfuse_defaults() {
 fn esbc_doppler_velocity_of_a_static_station() {
     let Some(data) = shared() else { return };
     let d = data.join("igs/ESBC00DNK_2020177");
-    let job = navfuse_app::spp::SppJob {
-        obs: d.join("ESBC00DNK_R_20201770000_03H_30S_MO.rnx"),
-        navs: vec![d.join("ESBC00DNK_R_20201770000_01D_MN.rnx")],
-        systems: navfuse_gnss::signal_plan::parse_systems("G,R,E,C").unwrap(),
-        signals: Vec::new(),
-        dual_frequency: false,
-        sp3: Vec::new(),
-        clk: Vec::new(),
-        elevation_mask_deg: 10.0,
-        broadcast_iono: true,
-        troposphere: true,
-        fde: true,
-        rtklib_weights: false,
-        cn0_weighting: None,
-    };
+    let job = navfuse_app::spp::SppJob::new(
+        d.join("ESBC00DNK_R_20201770000_03H_30S_MO.rnx"),
+        vec![d.join("ESBC00DNK_R_20201770000_01D_MN.rnx")],
+        navfuse_gnss::signal_plan::parse_systems("G,R,E,C").unwrap(),
+    );
     let run = navfuse_app::spp::run_spp(&job).unwrap();
     let speeds: Vec<f64> = run
         .epochs

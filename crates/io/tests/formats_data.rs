@@ -2,6 +2,8 @@
 //! are absent). Speed checks are `#[ignore]`d: run them with
 //! `cargo test --release -p navfuse-io --test formats_data -- --ignored --nocapture`.
 
+mod shared_data;
+
 use nalgebra::Vector3;
 use navfuse_core::{ImuErrors, ImuSample, NavState};
 use navfuse_gnss::System;
@@ -16,17 +18,7 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::Instant;
 
-fn data(rel: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data")
-        .join(rel);
-    if p.exists() {
-        Some(p)
-    } else {
-        eprintln!("SKIP: {} not found", p.display());
-        None
-    }
-}
+use shared_data::data;
 
 fn tmp_dir(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("navfuse-data-{}-{name}", std::process::id()));

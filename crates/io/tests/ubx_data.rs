@@ -4,6 +4,8 @@
 //! GPS ephemeris of the navigation file decoded from RXM-SFRBX, equal to D19.12.
 //! Skipped with a printed reason without the data.
 
+mod shared_data;
+
 use navfuse_gnss::{GpsEphemeris, System};
 use navfuse_io::rinex_nav::read_rinex_nav;
 use navfuse_io::rinex_obs::read_rinex_obs_all;
@@ -12,15 +14,7 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 fn data(rel: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data/rtklibexplorer/walk_0827")
-        .join(rel);
-    if p.exists() {
-        Some(p)
-    } else {
-        eprintln!("skipped: {} not found", p.display());
-        None
-    }
+    shared_data::data(&format!("rtklibexplorer/walk_0827/{rel}"))
 }
 
 #[test]

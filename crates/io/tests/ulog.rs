@@ -2,6 +2,8 @@
 //! message when ../shared/data is missing) and damaged input, which must give errors
 //! or warnings with byte offsets and never panic.
 
+mod shared_data;
+
 use navfuse_io::baro::{read_baro, BaroFormat, BaroQuantity, BaroSource};
 use navfuse_io::gnss::read_gnss;
 use navfuse_io::imu::open_imu;
@@ -11,15 +13,7 @@ use navfuse_io::ulog::{self, Ulog};
 use std::path::PathBuf;
 
 fn data(rel: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data/px4")
-        .join(rel);
-    if p.exists() {
-        Some(p)
-    } else {
-        eprintln!("SKIP: {} not found", p.display());
-        None
-    }
+    shared_data::data(&format!("px4/{rel}"))
 }
 
 fn imu_src(path: PathBuf) -> ImuSource {
