@@ -13,8 +13,8 @@ pub struct SppArgs {
     /// RINEX navigation file(s) with the broadcast ephemerides (mixed or per system).
     #[arg(required = true)]
     pub nav: Vec<PathBuf>,
-    /// Constellations, comma-separated RINEX letters: G GPS, R GLONASS, E Galileo, C
-    /// BeiDou, J QZSS, I NavIC. GPS and QZSS share the receiver clock; each other
+    /// Constellations, comma-separated RINEX letters or names: G GPS, R GLONASS, E
+    /// Galileo, C BeiDou, J QZSS, I NavIC (e.g. G,E or GPS,Galileo). GPS and QZSS share the receiver clock; each other
     /// system gets an inter-system bias.
     #[arg(long, default_value = "G", value_name = "LIST")]
     pub systems: String,

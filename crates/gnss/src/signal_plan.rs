@@ -129,18 +129,31 @@ impl SignalPlan {
     }
 }
 
-/// Parse a system list such as `G,E,C` or `GREC` (letters, commas and spaces).
+/// Parse a system list such as `G,E,C`, `GREC`, `g,e` or `GPS,Galileo` (letters in
+/// either case, or system names, separated by commas or spaces).
 pub fn parse_systems(s: &str) -> Result<Vec<System>, String> {
     let mut out = Vec::new();
-    for c in s.chars().filter(|c| !matches!(c, ',' | ' ')) {
-        let sys = System::from_letter(c)
-            .filter(|_| c != ' ')
-            .ok_or_else(|| format!("'{c}' is not a system letter (G R E C J I)"))?;
+    let mut add = |sys: System| -> Result<(), String> {
         if sys == System::Sbas {
             return Err("S (SBAS) is not used for ranging".into());
         }
         if !out.contains(&sys) {
             out.push(sys);
+        }
+        Ok(())
+    };
+    for token in s.split([',', ' ']).filter(|t| !t.is_empty()) {
+        if let Some(sys) = System::ALL
+            .iter()
+            .find(|x| x.name().eq_ignore_ascii_case(token))
+        {
+            add(*sys)?;
+            continue;
+        }
+        for c in token.chars() {
+            let sys = System::from_letter(c.to_ascii_uppercase())
+                .ok_or_else(|| format!("'{c}' in '{token}' is not a system letter (G R E C J I) or name (GPS, Galileo, ...)"))?;
+            add(sys)?;
         }
     }
     if out.is_empty() {
@@ -242,6 +255,11 @@ mod tests {
             ]
         );
         assert!(parse_systems("G,X").unwrap_err().contains("'X'"));
+        assert_eq!(
+            parse_systems("gps, Galileo,c").unwrap(),
+            vec![System::Gps, System::Galileo, System::BeiDou]
+        );
+        assert!(parse_systems("gpx").unwrap_err().contains("'p' in 'gpx'"));
         assert!(parse_systems("").is_err());
         assert!(parse_systems("S").is_err());
         assert!(parse_codes("R=C1P").unwrap_err().contains("SYSTEM:CODE"));
