@@ -94,6 +94,8 @@ pub(crate) fn read(cfg: &RunConfig, job: &mut JobResult, warn: bool) -> Result<I
         }
         _ => Vec::new(),
     };
+    // The heading's week: an NMEA log's own (its dates), else the GNSS input's.
+    let mut heading_week = gnss_week;
     let mut heading: Vec<HeadingObs> = match &cfg.heading {
         Some(src) if cfg.nav.heading.baseline_b.is_some() => {
             let h = match &src.nmea {
@@ -101,6 +103,7 @@ pub(crate) fn read(cfg: &RunConfig, job: &mut JobResult, warn: bool) -> Result<I
                 Some(o) => {
                     let d = navfuse_io::nmea::read_nmea(&src.path, o)?;
                     reader_warnings.extend(d.warnings);
+                    heading_week = d.gps_week.or(gnss_week);
                     d.heading
                 }
             };
@@ -117,19 +120,26 @@ pub(crate) fn read(cfg: &RunConfig, job: &mut JobResult, warn: bool) -> Result<I
         warn,
         reader_warnings.into_iter().map(Finding::warning).collect(),
     )?;
-    // Put GNSS times (fixes and heading) on the IMU's week reference.
-    if let (Some(wi), Some(wg)) = (imu_week, gnss_week) {
-        let shift = (wg as f64 - wi as f64) * WEEK_S;
-        if shift != 0.0 {
-            fixes.iter_mut().for_each(|f| f.t += shift);
-            heading.iter_mut().for_each(|h| h.t += shift);
-            for e in raw.iter_mut() {
-                e.t += shift;
-                if let Some(f) = e.fix.as_mut() {
-                    f.t += shift;
-                }
+    // Put GNSS times (fixes and heading) on the run's week reference: the IMU's, else
+    // the GNSS input's.
+    let week_ref = imu_week.or(gnss_week);
+    let shift_s = |w: Option<u32>| match (week_ref, w) {
+        (Some(r), Some(w)) => (w as f64 - r as f64) * WEEK_S,
+        _ => 0.0,
+    };
+    let shift = shift_s(gnss_week);
+    if shift != 0.0 {
+        fixes.iter_mut().for_each(|f| f.t += shift);
+        for e in raw.iter_mut() {
+            e.t += shift;
+            if let Some(f) = e.fix.as_mut() {
+                f.t += shift;
             }
         }
+    }
+    let shift = shift_s(heading_week);
+    if shift != 0.0 {
+        heading.iter_mut().for_each(|h| h.t += shift);
     }
     Ok(Inputs {
         reader,

@@ -774,6 +774,14 @@ fn gnss_systems_and_inter_system_bias_keys() {
     let d = round_trip("systems_multi", &c);
     assert_eq!(d.nav.gnss.systems, c.nav.gnss.systems);
 
+    // As users type them: names or lower case, or one string.
+    for (name, v) in [
+        ("systems_names.toml", "[\"gps\", \"Galileo\", \"c\"]"),
+        ("systems_string.toml", "\"G, galileo,C\""),
+    ] {
+        let c = ok(name, &with(&format!("{rinex}systems = {v}\n")));
+        assert_eq!(c.nav.gnss.systems, vec![Gps, Galileo, BeiDou], "{v}");
+    }
     check_err(
         "systems_bad.toml",
         &format!("{rinex}systems = [\"G\", \"X\"]\n"),
@@ -864,6 +872,25 @@ fn gnss_signals_and_orbits_keys() {
     let back = c.to_toml_string();
     let d = ok("signals_multi_rt.toml", &back);
     assert_eq!(rinex_of(&d), r, "{back}");
+    // A single code as a string; systems by name or in lower case.
+    let c = ok(
+        "signals_lenient.toml",
+        &with(&format!(
+            "{rinex}signals = {{ r = \"C1P\", Galileo = [\"C1X\"] }}\n"
+        )),
+    );
+    let got: Vec<(char, Vec<String>)> = rinex_of(&c)
+        .signals
+        .iter()
+        .map(|(s, c)| (s.letter(), c.iter().map(|x| x.to_string()).collect()))
+        .collect();
+    assert_eq!(
+        got,
+        vec![
+            ('E', vec!["C1X".to_string()]),
+            ('R', vec!["C1P".to_string()])
+        ]
+    );
     check_err(
         "signals_bad.toml",
         &format!("{rinex}signals = {{ R = [\"L1P\"] }}\n"),

@@ -503,7 +503,10 @@ fn targets() -> Vec<Target> {
         Target {
             name: "ulog",
             ext: "ulg",
-            seeds: vec![navfuse_io::ulog::synth::synthetic_ulog(2)],
+            seeds: vec![
+                navfuse_io::ulog::synth::synthetic_ulog(2),
+                navfuse_io::ulog::synth::synthetic_ulog_separate_imu(2),
+            ],
             check: ulog,
         },
         t("rinex_nav", "nav", &[&format!("{f}walk_0827.nav")], rinex_nav),

@@ -217,6 +217,96 @@ fn synthetic_log_every_message_type() {
     assert!((tr.points[0].lla.z - 500.0).abs() < 1e-3);
 }
 
+/// A log with `sensor_gyro` + `sensor_accel` and no `sensor_combined` (the accel
+/// sampled 4 ms after the gyro) gives the increments of the combined log.
+#[test]
+fn separate_gyro_and_accel_topics_give_the_combined_imu() {
+    let dir = std::env::temp_dir().join(format!("navfuse-ulog-sep-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let read = |name: &str, bytes: Vec<u8>| {
+        let p = dir.join(name);
+        std::fs::write(&p, bytes).unwrap();
+        let mut r = open_imu(&ImuSource {
+            rate_hz: 100.0,
+            ..imu_src(p)
+        })
+        .unwrap();
+        let s: Vec<_> = r.by_ref().map(|s| s.unwrap()).collect();
+        (s, r.report().warnings.clone())
+    };
+    let (combined, _) = read("combined.ulg", ulog::synth::synthetic_ulog(3));
+    let (separate, warnings) = read("separate.ulg", ulog::synth::synthetic_ulog_separate_imu(3));
+    // The first gyro sample has no accelerometer sample before it: left out, and said
+    // so; the next only starts the intervals (instantaneous rates).
+    assert_eq!(separate.len() + 2, combined.len());
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.contains("sensor_gyro + sensor_accel: 1 records left out")),
+        "{warnings:?}"
+    );
+    // The same times from the third gyro sample on (the combined log's first
+    // interval is the nominal one).
+    for (a, b) in combined.iter().skip(2).zip(&separate) {
+        assert!((a.t - b.t).abs() < 1e-9, "{} {}", a.t, b.t);
+        assert!(
+            (a.dtheta - b.dtheta).norm() < 1e-12,
+            "{} {}",
+            a.dtheta,
+            b.dtheta
+        );
+        assert!((a.dvel - b.dvel).norm() < 1e-9, "{} {}", a.dvel, b.dvel);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The SITL log's own `sensor_gyro` / `sensor_accel` records (logged at about 1 Hz,
+/// too slow to be the IMU: refused, saying so) against the `sensor_combined` record
+/// nearest in time: the same units and frame (SITL: calibration near identity).
+#[test]
+fn sitl_log_separate_topics_agree_with_sensor_combined() {
+    let Some(p) = data("sample_px4_events.ulg") else {
+        return;
+    };
+    let u = load(&p);
+    let map = ulog::TimeMap::of(&u, 0);
+    let e = ulog::separate_imu(&p, &u, 0, &map).unwrap_err().to_string();
+    println!("{e}");
+    assert!(e.contains("sensor_gyro") && e.contains("Hz"), "{e}");
+    let comb = u.topic("sensor_combined", 0).unwrap();
+    let ct: Vec<f64> = (0..comb.len())
+        .map(|k| comb.timestamp_us(k).unwrap() as f64)
+        .collect();
+    for (name, base, tol) in [
+        ("sensor_gyro", "gyro_rad", 0.02),
+        ("sensor_accel", "accelerometer_m_s2", 0.3),
+    ] {
+        let t = u.topic(name, 0).unwrap();
+        let xyz = ["x", "y", "z"].map(|n| t.field(n).unwrap().clone());
+        let ts = t.field("timestamp_sample").unwrap().clone();
+        let cf = [0, 1, 2].map(|i| comb.field(&format!("{base}[{i}]")).unwrap().clone());
+        let mut diffs = Vec::new();
+        for k in 0..t.len() {
+            let tk = t.value(k, &ts);
+            let j = ct.partition_point(|&c| c < tk).min(ct.len() - 1);
+            if (ct[j] - tk).abs() > 5_000.0 {
+                continue;
+            }
+            for i in 0..3 {
+                diffs.push((t.value(k, &xyz[i]) - comb.value(j, &cf[i])).abs());
+            }
+        }
+        diffs.sort_by(f64::total_cmp);
+        let med = diffs[diffs.len() / 2];
+        println!(
+            "{name}: {} axis values matched, median |difference| {med:.4}",
+            diffs.len()
+        );
+        assert!(diffs.len() >= 60, "{}", diffs.len());
+        assert!(med < tol, "{name}: median difference {med}");
+    }
+}
+
 /// Damaged input: errors or warnings with byte offsets, never a panic.
 #[test]
 fn damaged_logs_give_byte_offsets() {

@@ -16,7 +16,7 @@ use super::rinex;
 use super::tight::TTight;
 use super::units::{arr3, vec3, SAME};
 use super::validate::{finite, gate, non_negative, opt_or, positive, std3, system_letter, v3};
-use super::values::{Gate, Num3, OneOrMany};
+use super::values::{Gate, Num3, OneOrMany, Strings};
 use super::RelativeOutage;
 use crate::input::{Coupling, GnssFormat, GnssSource};
 
@@ -66,7 +66,7 @@ pub(super) struct TGnss {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) fde: Option<bool>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub(super) signals: Option<std::collections::BTreeMap<String, Vec<String>>>,
+    pub(super) signals: Option<std::collections::BTreeMap<String, Strings>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) dual_frequency: Option<bool>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -90,7 +90,7 @@ pub(super) struct TGnss {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) dgps_max_age_s: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub(super) systems: Option<Vec<String>>,
+    pub(super) systems: Option<Strings>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) tight: Option<TTight>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -408,7 +408,7 @@ pub(super) fn convert(
         fusion,
         fix_error,
         systems: match &g.systems {
-            Some(letters) => convert_systems(letters)?,
+            Some(letters) => convert_systems(&letters.0)?,
             None => d.systems,
         },
     };
@@ -439,9 +439,15 @@ pub(super) fn rinex_key_set(g: &TGnss) -> Option<&'static str> {
     .map(|(key, _)| key)
 }
 
-/// `gnss.systems`: RINEX letters, each once, at least one.
-fn convert_systems(letters: &[String]) -> KResult<Vec<System>> {
+/// `gnss.systems`: RINEX letters or system names (either case; a string may list
+/// several, separated by commas or spaces), each once, at least one.
+fn convert_systems(items: &[String]) -> KResult<Vec<System>> {
     let key = "gnss.systems";
+    let letters: Vec<&str> = items
+        .iter()
+        .flat_map(|s| s.split([',', ' ']))
+        .filter(|t| !t.is_empty())
+        .collect();
     if letters.is_empty() {
         return Err(kerr(
             key,
@@ -564,12 +570,16 @@ pub(super) fn to_toml(
     }
     if let GnssFormat::Rinex(r) = &g.format {
         rinex::to_toml(r, tight, &mut t, w);
-        t.systems = Some(go.systems.iter().map(|s| s.letter().to_string()).collect());
+        t.systems = Some(Strings(
+            go.systems.iter().map(|s| s.letter().to_string()).collect(),
+        ));
     }
     if let GnssFormat::Ubx(u) = &g.format {
         super::ubx::to_toml(u, tight, &mut t, w);
         if matches!(u, crate::input::UbxGnss::Raw(_)) {
-            t.systems = Some(go.systems.iter().map(|s| s.letter().to_string()).collect());
+            t.systems = Some(Strings(
+                go.systems.iter().map(|s| s.letter().to_string()).collect(),
+            ));
         }
     }
     t

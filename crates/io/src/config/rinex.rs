@@ -12,7 +12,8 @@ use super::gnss::TGnss;
 use super::paths::{file_key, PathWriter};
 use super::tight;
 use super::units::{DEG, SAME};
-use super::validate::{opt_or, positive, v3};
+use super::validate::{opt_or, positive, system_letter, v3};
+use super::values::Strings;
 use crate::input::{Coupling, DgpsKind, DgpsSource, Orbits, RinexGnss};
 
 /// Default `gnss.elevation_mask_deg`.
@@ -100,8 +101,11 @@ pub(super) fn convert_with_nav(
         Some(m) => {
             let text: Vec<String> = m
                 .iter()
-                .map(|(sys, codes)| format!("{sys}:{}", codes.join("+")))
-                .collect();
+                .map(|(sys, codes)| {
+                    let sys = system_letter("gnss.signals", sys)?;
+                    Ok(format!("{}:{}", sys.letter(), codes.0.join("+")))
+                })
+                .collect::<KResult<_>>()?;
             navfuse_gnss::signal_plan::parse_codes(&text.join(",")).map_err(|e| {
                 kerr(
                     "gnss.signals",
@@ -201,7 +205,7 @@ pub(super) fn to_toml(r: &RinexGnss, tight: &TightOptions, t: &mut TGnss, w: &Pa
                 .map(|(s, c)| {
                     (
                         s.letter().to_string(),
-                        c.iter().map(|x| x.to_string()).collect(),
+                        Strings(c.iter().map(|x| x.to_string()).collect()),
                     )
                 })
                 .collect(),

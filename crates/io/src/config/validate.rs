@@ -12,10 +12,13 @@ use crate::error::{check_finite_si, check_scale};
 /// A satellite system by its RINEX letter (`G`, `R`, `E`, `C`, `J`, `S`, `I`).
 pub(super) fn system_letter(key: &str, letter: &str) -> KResult<navfuse_core::sat::System> {
     use navfuse_core::sat::System;
-    let mut chars = letter.chars();
+    let mut chars = letter.trim().chars();
     match (chars.next(), chars.next()) {
-        (Some(c), None) if c != ' ' => System::from_letter(c),
-        _ => None,
+        (Some(c), None) if c != ' ' => System::from_letter(c.to_ascii_uppercase()),
+        _ => System::ALL
+            .iter()
+            .copied()
+            .find(|s| s.name().eq_ignore_ascii_case(letter.trim())),
     }
     .ok_or_else(|| {
         let all: Vec<String> = System::ALL
@@ -25,7 +28,7 @@ pub(super) fn system_letter(key: &str, letter: &str) -> KResult<navfuse_core::sa
         kerr(
             key,
             format!(
-                "expected a system letter, one of {}, got \"{letter}\"",
+                "expected a system letter or name, one of {}, got \"{letter}\"",
                 all.join(", ")
             ),
         )

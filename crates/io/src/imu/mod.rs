@@ -183,10 +183,20 @@ pub fn open_imu(src: &ImuSource) -> Result<ImuReader, InputError> {
             let u = crate::ulog::open(path, &mut ulog_warnings)?;
             let map = crate::ulog::TimeMap::of(&u, 0);
             gps_week = map.week;
-            let (mut raw, _) = crate::ulog::imu_rates(path, &u, *multi_id, &map)?;
-            raw.iter_mut().for_each(|r| r.0 += src.time_offset_s);
-            let kind = Kind::Ulog(raw.into_iter());
-            (kind, ImuQuantity::Rate, RateSampling::IntervalMean)
+            let mut imu = crate::ulog::imu_rates(path, &u, *multi_id, &map)?;
+            imu.samples
+                .iter_mut()
+                .for_each(|r| r.0 += src.time_offset_s);
+            if imu.skipped > 0 {
+                ulog_warnings.push(format!(
+                    "{}: {}: {} records left out (no accelerometer sample, non-finite values or out of time order)",
+                    path.display(),
+                    imu.topics,
+                    imu.skipped
+                ));
+            }
+            let kind = Kind::Ulog(imu.samples.into_iter());
+            (kind, ImuQuantity::Rate, imu.sampling)
         }
     };
     Ok(ImuReader {

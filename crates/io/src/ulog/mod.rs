@@ -3,7 +3,8 @@
 //!
 //! - IMU: `sensor_combined` (`gyro_rad` [rad/s], `accelerometer_m_s2` [m/s²]: means
 //!   over `gyro_integral_dt` / `accelerometer_integral_dt`, so interval-mean rates),
-//!   body frame FRD;
+//!   body frame FRD; without it, `sensor_gyro` + `sensor_accel` joined on the gyro
+//!   sample times ([`separate_imu`]);
 //! - GNSS: `vehicle_gps_position` (else `sensor_gps`): `lat`/`lon` [1e-7 deg] and
 //!   `alt_ellipsoid` [mm] or `latitude_deg`/`longitude_deg`/`altitude_ellipsoid_m`
 //!   (newer PX4), `eph`/`epv` [m] as position sigmas, `vel_n_m_s`.. with
@@ -26,6 +27,7 @@ pub mod synth;
 pub use parse::{Topic, Ulog, UlogError, MAGIC};
 
 use crate::error::InputError;
+use crate::input::RateSampling;
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use navfuse_core::attitude::euler_from_q_bn;
 use navfuse_core::eval::TrajPoint;
@@ -135,16 +137,26 @@ fn need<'a>(path: &Path, t: &'a Topic<'_>, name: &str) -> Result<&'a parse::Fiel
     })
 }
 
+/// The three fields `name(0)`, `name(1)`, `name(2)`.
+fn fields3<'a>(
+    path: &Path,
+    t: &'a Topic<'_>,
+    name: impl Fn(usize) -> String,
+) -> Result<[&'a parse::Field; 3], InputError> {
+    Ok([
+        need(path, t, &name(0))?,
+        need(path, t, &name(1))?,
+        need(path, t, &name(2))?,
+    ])
+}
+
+/// `base[0]`, `base[1]`, `base[2]`.
 fn vec3_fields<'a>(
     path: &Path,
     t: &'a Topic<'_>,
     base: &str,
 ) -> Result<[&'a parse::Field; 3], InputError> {
-    Ok([
-        need(path, t, &format!("{base}[0]"))?,
-        need(path, t, &format!("{base}[1]"))?,
-        need(path, t, &format!("{base}[2]"))?,
-    ])
+    fields3(path, t, |i| format!("{base}[{i}]"))
 }
 
 fn topic<'a>(path: &Path, u: &'a Ulog, name: &str, multi_id: u8) -> Result<Topic<'a>, InputError> {
@@ -169,40 +181,204 @@ fn topic<'a>(path: &Path, u: &'a Ulog, name: &str, multi_id: u8) -> Result<Topic
     })
 }
 
-/// IMU samples from `sensor_combined` instance `multi_id`: (t [s], gyro [rad/s],
-/// accel [m/s²]) in the body frame (FRD), interval-mean rates. Records whose
-/// accelerometer time is marked invalid, or with non-finite values, are skipped
-/// and counted in the second value.
+/// IMU samples of a log, rates in the body frame (FRD).
+#[derive(Clone, Debug)]
+pub struct UlogImu {
+    /// (t [s], gyro [rad/s], accel [m/s²]) in time order.
+    pub samples: Vec<(f64, Vector3<f64>, Vector3<f64>)>,
+    /// Records left out (no accelerometer sample, non-finite values, out of order).
+    pub skipped: usize,
+    /// How the rates relate to their time tags.
+    pub sampling: RateSampling,
+    /// Where they came from: `sensor_combined`, or `sensor_gyro + sensor_accel`.
+    pub topics: &'static str,
+}
+
+/// IMU samples from `sensor_combined` instance `multi_id` (interval-mean rates);
+/// without that topic, from `sensor_gyro` and `sensor_accel` of that instance
+/// ([`separate_imu`]).
 pub fn imu_rates(
     path: &Path,
     u: &Ulog,
     multi_id: u8,
     map: &TimeMap,
-) -> Result<(Vec<(f64, Vector3<f64>, Vector3<f64>)>, usize), InputError> {
+) -> Result<UlogImu, InputError> {
+    if u.topic("sensor_combined", multi_id).is_none()
+        && u.topic("sensor_gyro", multi_id).is_some()
+        && u.topic("sensor_accel", multi_id).is_some()
+    {
+        return separate_imu(path, u, multi_id, map);
+    }
     let t = topic(path, u, "sensor_combined", multi_id)?;
     let g = vec3_fields(path, &t, "gyro_rad")?;
     let a = vec3_fields(path, &t, "accelerometer_m_s2")?;
     let rel = t.field("accelerometer_timestamp_relative");
-    let mut out = Vec::with_capacity(t.len());
-    let mut skipped = 0;
+    let mut out = UlogImu {
+        samples: Vec::with_capacity(t.len()),
+        skipped: 0,
+        sampling: RateSampling::IntervalMean,
+        topics: "sensor_combined",
+    };
     for k in 0..t.len() {
         let Some(ts) = t.timestamp_us(k) else {
             return Err(InputError::new(path, "sensor_combined: no u64 timestamp"));
         };
         // RELATIVE_TIMESTAMP_INVALID: no accelerometer sample in this record.
         if rel.is_some_and(|r| t.value(k, r) == i32::MAX as f64) {
-            skipped += 1;
+            out.skipped += 1;
             continue;
         }
         let gv = Vector3::new(t.value(k, g[0]), t.value(k, g[1]), t.value(k, g[2]));
         let av = Vector3::new(t.value(k, a[0]), t.value(k, a[1]), t.value(k, a[2]));
         if gv.iter().chain(av.iter()).any(|v| !v.is_finite()) {
-            skipped += 1;
+            out.skipped += 1;
             continue;
         }
-        out.push((map.t(ts), gv, av));
+        out.samples.push((map.t(ts), gv, av));
     }
-    Ok((out, skipped))
+    Ok(out)
+}
+
+const AXES: [&str; 3] = ["x", "y", "z"];
+
+/// One sensor topic's samples: (sample time [µs since boot], x y z).
+struct SensorSeries {
+    t_us: Vec<f64>,
+    xyz: Vec<Vector3<f64>>,
+    skipped: usize,
+}
+
+/// `sensor_gyro` or `sensor_accel`: PX4 v1.11+ (`timestamp_sample`, `x y z`:
+/// instantaneous rates, board rotation applied) or older PX4 (`x_integral` over
+/// `integral_dt` [µs]: interval means). The bool says whether the rates are means.
+fn sensor_series(path: &Path, t: &Topic<'_>) -> Result<(SensorSeries, bool), InputError> {
+    let integral = match (t.field("integral_dt"), t.field("x_integral")) {
+        (Some(dt), Some(_)) => Some((dt, fields3(path, t, |i| format!("{}_integral", AXES[i]))?)),
+        _ => None,
+    };
+    let xyz = [
+        need(path, t, "x")?,
+        need(path, t, "y")?,
+        need(path, t, "z")?,
+    ];
+    let sample = t.field("timestamp_sample");
+    let mut s = SensorSeries {
+        t_us: Vec::with_capacity(t.len()),
+        xyz: Vec::with_capacity(t.len()),
+        skipped: 0,
+    };
+    for k in 0..t.len() {
+        let Some(ts) = t.timestamp_us(k) else {
+            return Err(InputError::new(
+                path,
+                format!("{}: no u64 timestamp", t.name),
+            ));
+        };
+        let tk = sample.map_or(ts as f64, |f| t.value(k, f));
+        let v = match &integral {
+            Some((dt, f)) => {
+                let dt_s = t.value(k, dt) * 1e-6;
+                Vector3::new(t.value(k, f[0]), t.value(k, f[1]), t.value(k, f[2])) / dt_s
+            }
+            None => Vector3::new(t.value(k, xyz[0]), t.value(k, xyz[1]), t.value(k, xyz[2])),
+        };
+        let ordered = s.t_us.last().is_none_or(|&p| tk > p);
+        if !tk.is_finite() || !ordered || v.iter().any(|x| !x.is_finite()) {
+            s.skipped += 1;
+            continue;
+        }
+        s.t_us.push(tk);
+        s.xyz.push(v);
+    }
+    Ok((s, integral.is_some()))
+}
+
+/// IMU samples from `sensor_gyro` and `sensor_accel` instance `multi_id` (logs
+/// without `sensor_combined`): one sample per gyro record, the accelerometer
+/// interpolated linearly to the gyro sample time (instantaneous rates), or the
+/// nearest accelerometer record (interval means, old PX4). A gyro record without
+/// accelerometer records within 0.05 s on both sides (interpolation) or within
+/// 0.05 s (nearest) is skipped. These topics are the drivers' output before PX4's
+/// calibration: the filter's bias states take up what calibration would remove.
+pub fn separate_imu(
+    path: &Path,
+    u: &Ulog,
+    multi_id: u8,
+    map: &TimeMap,
+) -> Result<UlogImu, InputError> {
+    const MAX_GAP_US: f64 = 50_000.0;
+    let (gyro, gyro_mean) = sensor_series(path, &topic(path, u, "sensor_gyro", multi_id)?)?;
+    let (acc, acc_mean) = sensor_series(path, &topic(path, u, "sensor_accel", multi_id)?)?;
+    if gyro_mean != acc_mean {
+        return Err(InputError::new(
+            path,
+            "sensor_gyro and sensor_accel of different PX4 versions (one integrated, one not)",
+        ));
+    }
+    let mut out = UlogImu {
+        samples: Vec::with_capacity(gyro.t_us.len()),
+        skipped: gyro.skipped,
+        sampling: if gyro_mean {
+            RateSampling::IntervalMean
+        } else {
+            RateSampling::Instant
+        },
+        topics: "sensor_gyro + sensor_accel",
+    };
+    // A topic logged at a low rate (about 1 Hz in the SITL log here) is no
+    // IMU: refuse it, saying the rate.
+    for (name, s) in [("sensor_gyro", &gyro), ("sensor_accel", &acc)] {
+        let n = s.t_us.len();
+        let span_s = match (s.t_us.first(), s.t_us.last()) {
+            (Some(a), Some(b)) if n > 1 => (b - a) * 1e-6,
+            _ => 0.0,
+        };
+        let rate_hz = if span_s > 0.0 {
+            (n - 1) as f64 / span_s
+        } else {
+            0.0
+        };
+        if rate_hz < 20.0 {
+            return Err(InputError::new(
+                path,
+                format!(
+                    "{name} instance {multi_id}: {n} records at {rate_hz:.1} Hz, too few for an IMU (at least 20 Hz); use a log with sensor_combined, or one with sensor_gyro and sensor_accel logged at the sensor rate"
+                ),
+            )
+            .with_field(name));
+        }
+    }
+    let mut j = 0; // first accel sample at or after the gyro time
+    for (&tg, &wg) in gyro.t_us.iter().zip(&gyro.xyz) {
+        while j < acc.t_us.len() && acc.t_us[j] < tg {
+            j += 1;
+        }
+        let after = (j < acc.t_us.len()).then(|| (acc.t_us[j], acc.xyz[j]));
+        let before = j.checked_sub(1).map(|i| (acc.t_us[i], acc.xyz[i]));
+        let a = if gyro_mean {
+            [before, after]
+                .into_iter()
+                .flatten()
+                .filter(|(ta, _)| (ta - tg).abs() <= MAX_GAP_US)
+                .min_by(|x, y| (x.0 - tg).abs().total_cmp(&(y.0 - tg).abs()))
+                .map(|(_, a)| a)
+        } else {
+            match (before, after) {
+                (_, Some((ta, a))) if ta == tg => Some(a),
+                (Some((t0, a0)), Some((t1, a1)))
+                    if tg - t0 <= MAX_GAP_US && t1 - tg <= MAX_GAP_US =>
+                {
+                    Some(a0 + (a1 - a0) * ((tg - t0) / (t1 - t0)))
+                }
+                _ => None,
+            }
+        };
+        match a {
+            Some(a) if tg >= 0.0 => out.samples.push((map.t(tg as u64), wg, a)),
+            _ => out.skipped += 1,
+        }
+    }
+    Ok(out)
 }
 
 /// GNSS fixes (fix_type >= 3) from the first GPS topic present, instance `multi_id`;

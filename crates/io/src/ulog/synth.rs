@@ -60,9 +60,20 @@ impl Rec {
     }
 }
 
-/// The log: `seconds` of 100 Hz IMU, 5 Hz GPS, 10 Hz baro, 50 Hz attitude and
-/// 10 Hz global position.
+/// The log: `seconds` of 100 Hz IMU (`sensor_combined`), 5 Hz GPS, 10 Hz baro,
+/// 50 Hz attitude and 10 Hz global position.
 pub fn synthetic_ulog(seconds: u32) -> Vec<u8> {
+    build(seconds, false)
+}
+
+/// [`synthetic_ulog`] with the IMU as PX4 v1.11+ `sensor_gyro` (100 Hz) and
+/// `sensor_accel` (100 Hz, sampled 4 ms after the gyro) instead of
+/// `sensor_combined`, the same rates.
+pub fn synthetic_ulog_separate_imu(seconds: u32) -> Vec<u8> {
+    build(seconds, true)
+}
+
+fn build(seconds: u32, separate_imu: bool) -> Vec<u8> {
     let mut out = Vec::new();
     out.extend_from_slice(&super::MAGIC);
     out.push(1);
@@ -109,12 +120,22 @@ pub fn synthetic_ulog(seconds: u32) -> Vec<u8> {
         "vehicle_global_position:uint64_t timestamp;double lat;double lon;float alt;\
          float alt_ellipsoid;",
         "vehicle_local_position:uint64_t timestamp;float vx;float vy;float vz;",
+        "sensor_gyro:uint64_t timestamp;uint64_t timestamp_sample;uint32_t device_id;float x;\
+         float y;float z;float temperature;uint32_t error_count;uint8_t[3] clip_counter;\
+         uint8_t samples;uint8_t[4] _padding0;",
+        "sensor_accel:uint64_t timestamp;uint64_t timestamp_sample;uint32_t device_id;float x;\
+         float y;float z;float temperature;uint32_t error_count;uint8_t[3] clip_counter;\
+         uint8_t samples;uint8_t[4] _padding0;",
     ];
     for f in formats {
         msg(&mut out, b'F', f.as_bytes());
     }
     let names = [
-        "sensor_combined",
+        if separate_imu {
+            "sensor_gyro"
+        } else {
+            "sensor_combined"
+        },
         "vehicle_gps_position",
         "sensor_baro",
         "vehicle_attitude",
@@ -125,6 +146,9 @@ pub fn synthetic_ulog(seconds: u32) -> Vec<u8> {
         add(&mut out, 0, i as u16, n);
     }
     add(&mut out, 1, 6, "sensor_baro");
+    if separate_imu {
+        add(&mut out, 0, 7, "sensor_accel");
+    }
     let (lat, lon, h) = (47.4_f64, 8.5_f64, 500.0_f64);
     let steps = seconds * 100;
     for k in 0..=steps {
@@ -141,7 +165,26 @@ pub fn synthetic_ulog(seconds: u32) -> Vec<u8> {
             .f32(-9.81)
             .u32(10_000)
             .u8(0);
-        data(&mut out, 0, &imu.0); // trailing padding not logged
+        if separate_imu {
+            let sensor = |t_sample: u64, v: [f32; 3]| {
+                Rec::default()
+                    .u64(t_sample + 1_000)
+                    .u64(t_sample)
+                    .u32(0x24_0001)
+                    .f32(v[0])
+                    .f32(v[1])
+                    .f32(v[2])
+                    .f32(35.0)
+                    .u32(0)
+                    .bytes(3)
+                    .u8(1)
+                    .0
+            };
+            data(&mut out, 0, &sensor(ts, [1e-3, -2e-3, 5e-4]));
+            data(&mut out, 7, &sensor(ts + 4_000, [0.05, -0.03, -9.81]));
+        } else {
+            data(&mut out, 0, &imu.0); // trailing padding not logged
+        }
         if k % 20 == 0 {
             let gps = Rec::default()
                 .u64(ts)
