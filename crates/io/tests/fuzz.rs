@@ -113,6 +113,63 @@ fn csv_imu(p: &Path) -> Result<(), String> {
     check_imu(&imu_src(p, ImuFormat::Csv(o), 100.0))
 }
 
+/// An IMU in three CSV files (`[imu] files`): the case is the three files' texts
+/// separated by NUL bytes (mutations cross files, remove or add separators); the
+/// gyro file is joined row by row, the accelerometer file on its time column.
+fn imu_files(p: &Path) -> Result<(), String> {
+    check_imu(&imu_files_source(p)?)
+}
+
+/// The case file `p` split into the three files of an `[imu] files` source.
+fn imu_files_source(p: &Path) -> Result<ImuSource, String> {
+    let data = std::fs::read(p).map_err(|e| e.to_string())?;
+    let mut parts = data.split(|&b| b == 0);
+    let dir = p.with_extension("parts");
+    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+    let mut paths = Vec::new();
+    for name in ["time.csv", "gyro.csv", "accel.csv"] {
+        let q = dir.join(name);
+        std::fs::write(&q, parts.next().unwrap_or_default()).map_err(|e| e.to_string())?;
+        paths.push(q);
+    }
+    let files = CsvImuFiles {
+        time_path: paths[0].clone(),
+        time_col: 0,
+        gyro: CsvImuPart {
+            path: paths[1].clone(),
+            time_col: None,
+            cols: [0, 1, 2],
+        },
+        accel: CsvImuPart {
+            path: paths[2].clone(),
+            time_col: Some(0),
+            cols: [1, 2, 3],
+        },
+        skip_lines: None,
+        tolerance_s: 1e-4,
+        csv: CsvImuOptions::default(),
+    };
+    Ok(imu_src(p, ImuFormat::CsvFiles(Box::new(files)), 100.0))
+}
+
+/// The `imu_files` seed is a valid input (the cases start from a read that works):
+/// four rows, the first starting the intervals.
+#[test]
+fn imu_files_seed_reads() {
+    let dir = std::env::temp_dir().join(format!("navfuse-fuzz-seed-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let t = targets()
+        .into_iter()
+        .find(|t| t.name == "imu_files")
+        .unwrap();
+    let p = dir.join("seed.bin");
+    std::fs::write(&p, &t.seeds[0]).unwrap();
+    let r = navfuse_io::imu::open_imu(&imu_files_source(&p).unwrap()).unwrap();
+    let n = r.map(|s| s.unwrap()).count();
+    assert_eq!(n, 3);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 fn check_gnss(p: &Path, format: GnssFormat) -> Result<(), String> {
     let src = GnssSource {
         path: p.to_path_buf(),
@@ -468,6 +525,14 @@ fn targets() -> Vec<Target> {
     vec![
         t("kfgins_imu", "txt", &[&format!("{f}kfgins_imu.txt")], kfgins_imu as Check),
         t("csv_imu", "csv", &[&format!("{f}demo_imu.csv")], csv_imu),
+        inline(
+            "imu_files",
+            "bin",
+            "t_s\n100.00\n100.01\n100.02\n100.03\n\0gx,gy,gz\n0.01,0,-0.02\n0.01,0.001,-0.02\n\
+             0.011,0,-0.02\n0.01,0,-0.021\n\0t,ax,ay,az\n100.00,0.1,0,-9.8\n100.01,0.1,0,-9.81\n\
+             100.02,0.11,0,-9.8\n100.03,0.1,0.01,-9.8\n",
+            imu_files,
+        ),
         t("gnss_kfgins", "txt", &[&format!("{f}kfgins_gnss.txt")], gnss_kfgins),
         t("gnss_pos", "pos", &[&format!("{f}demo.pos")], gnss_pos),
         t("gnss_nmea", "nmea", &[&format!("{f}gnss.nmea")], gnss_nmea),
