@@ -99,7 +99,7 @@ pub(crate) fn read(cfg: &RunConfig, job: &mut JobResult, warn: bool) -> Result<I
     let mut heading: Vec<HeadingObs> = match &cfg.heading {
         Some(src) if cfg.nav.heading.baseline_b.is_some() => {
             let h = match &src.nmea {
-                None => read_heading_report(&src.path, &mut reader_warnings)?,
+                None => read_heading_report(&src.path, src.skip_lines, &mut reader_warnings)?,
                 Some(o) => {
                     let d = navfuse_io::nmea::read_nmea(&src.path, o)?;
                     reader_warnings.extend(d.warnings);

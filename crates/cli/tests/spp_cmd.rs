@@ -40,6 +40,7 @@ fn spp_command_matches_rnx2rtkp_on_the_walk() {
         format: GnssFormat::RtklibPos { quality: vec![5] },
         decimate_s: None,
         time_offset_s: 0.0,
+        skip_lines: None,
     })
     .expect("navfuse reads its own .pos back");
     assert!(mine.fixes.len() > 100, "{} epochs", mine.fixes.len());

@@ -71,6 +71,7 @@ fn compare(systems: &str, extra: &[&str], fde: bool) -> Option<Compared> {
         format: GnssFormat::RtklibPos { quality: vec![5] },
         decimate_s: None,
         time_offset_s: 0.0,
+        skip_lines: None,
     })
     .unwrap();
     let station = Vector3::from(ESBC_ECEF_M);
@@ -160,6 +161,7 @@ fn esbc_spp_all_systems_with_navfuse_defaults() {
             format: GnssFormat::RtklibPos { quality: vec![5] },
             decimate_s: None,
             time_offset_s: 0.0,
+            skip_lines: None,
         })
         .unwrap();
         let station = Vector3::from(ESBC_ECEF_M);

@@ -329,6 +329,7 @@ fn spp_agrees_with_rnx2rtkp_and_beats_nothing() {
         format: GnssFormat::RtklibPos { quality: vec![1] },
         decimate_s: None,
         time_offset_s: 0.0,
+        skip_lines: None,
     })
     .expect("read gnss_1730_sf.pos");
     score_vs_fixed("as filed", &ours, &fixed.fixes);

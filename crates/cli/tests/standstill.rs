@@ -54,6 +54,7 @@ fn noisy_odometer_at_rest_keeps_the_scale_and_zupt_and_braking_is_not_static() {
         format: OdometerFormat::Speed {
             speed_is_mean: true,
         },
+        skip_lines: None,
     });
     cfg.nav.odometer.std_mps = 0.1;
     cfg.nav.nhc.mode = navfuse_core::config::NhcMode::Always;

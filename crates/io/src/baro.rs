@@ -46,6 +46,9 @@ pub struct BaroSource {
     /// Sensor delay removed from the time tags \[s\].
     pub delay_s: f64,
     pub format: BaroFormat,
+    /// Text files: lines to skip at the top; None: a first line with no number is a
+    /// header.
+    pub skip_lines: Option<usize>,
 }
 
 /// Read a barometer file into pressure altitudes; a last line cut mid-write (no line
@@ -74,11 +77,11 @@ pub fn read_baro(
     let mut prev_t: Option<f64> = None;
     let mut seen_record = false;
     let mut warn = Some(warnings);
-    let mut header = crate::fmt::SkipLines::default();
+    let mut header = crate::fmt::SkipLines::new(src.skip_lines);
     while let Some((ln, text)) = lines.next_line()? {
         let mut record = || -> Result<(), InputError> {
             split_fields(text, &mut fields);
-            if header.skip(text, &fields) {
+            if header.skip(ln, text, &fields) {
                 return Ok(());
             }
             // A header line of names before the first record.

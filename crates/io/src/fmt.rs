@@ -404,20 +404,33 @@ pub(crate) fn is_comment_line(line: &[u8], fields: &[(usize, usize)]) -> bool {
     }
 }
 
-/// What the plain text readers (KF-GINS GNSS, heading, odometer, barometer, DGPS)
-/// skip: comment and blank lines ([`is_comment_line`]) and a header, the first other
-/// line when none of its fields is a number (column names such as `t,speed_mps`).
-/// Line numbers are the file's, header or not.
+/// What the plain text readers (KF-GINS GNSS, heading, odometer, barometer, the IMU
+/// files) skip: comment and blank lines ([`is_comment_line`]) and a header: the first
+/// `skip_lines` lines of the file when given, else the first other line when none of
+/// its fields is a number (column names such as `t,speed_mps`). Line numbers are the
+/// file's, header or not.
 #[derive(Default)]
 pub(crate) struct SkipLines {
     data_seen: bool,
+    lines: Option<usize>,
 }
 
 impl SkipLines {
-    /// True when the line (split into `fields`) is to be skipped.
-    pub(crate) fn skip(&mut self, line: &[u8], fields: &[(usize, usize)]) -> bool {
+    /// Skip the first `lines` lines (None: detect a header line).
+    pub(crate) fn new(lines: Option<usize>) -> SkipLines {
+        SkipLines {
+            data_seen: false,
+            lines,
+        }
+    }
+
+    /// True when line `ln` (split into `fields`) is to be skipped.
+    pub(crate) fn skip(&mut self, ln: usize, line: &[u8], fields: &[(usize, usize)]) -> bool {
         if is_comment_line(line, fields) {
             return true;
+        }
+        if let Some(n) = self.lines {
+            return ln <= n;
         }
         if std::mem::replace(&mut self.data_seen, true) {
             return false;

@@ -64,8 +64,8 @@ pub fn read_gnss(src: &GnssSource) -> Result<GnssData, InputError> {
     let mut warnings = Vec::new();
     let mut extra_skipped = 0;
     let (epochs, gps_week) = match &src.format {
-        GnssFormat::KfGins => (read_kfgins(path, src.time_offset_s, &mut warnings)?, None),
-        GnssFormat::RtklibPos { .. } => read_pos(path, src.time_offset_s, &mut warnings)?,
+        GnssFormat::KfGins => (read_kfgins(src, &mut warnings)?, None),
+        GnssFormat::RtklibPos { .. } => read_pos(src, &mut warnings)?,
         GnssFormat::Ulog { multi_id } => {
             read_ulog(path, *multi_id, src.time_offset_s, &mut warnings)?
         }
@@ -222,19 +222,16 @@ impl Line<'_> {
     }
 }
 
-fn read_kfgins(
-    path: &Path,
-    offset: f64,
-    warnings: &mut Vec<String>,
-) -> Result<Vec<Epoch>, InputError> {
+fn read_kfgins(src: &GnssSource, warnings: &mut Vec<String>) -> Result<Vec<Epoch>, InputError> {
+    let (path, offset) = (src.path.as_path(), src.time_offset_s);
     let mut lines = LineReader::open(path)?;
     let mut fields = Vec::with_capacity(16);
     let mut out = Vec::new();
     let mut prev: Option<f64> = None;
-    let mut header = crate::fmt::SkipLines::default();
+    let mut header = crate::fmt::SkipLines::new(src.skip_lines);
     for_each_line(&mut lines, warnings, |ln, text| {
         split_fields(text, &mut fields);
-        if header.skip(text, &fields) {
+        if header.skip(ln, text, &fields) {
             return Ok(());
         }
         let l = Line {
@@ -410,10 +407,10 @@ fn read_ulog(
 }
 
 fn read_pos(
-    path: &Path,
-    offset: f64,
+    src: &GnssSource,
     warnings: &mut Vec<String>,
 ) -> Result<(Vec<Epoch>, Option<u32>), InputError> {
+    let (path, offset) = (src.path.as_path(), src.time_offset_s);
     const WHAT: &str = "date time or week tow, lat lon h, Q ns, sdn sde sdu sdne sdeu sdun, age \
                         ratio [, vn ve vu, sdvn sdve sdvu sdvne sdveu sdvun]";
     let mut lines = LineReader::open(path)?;
@@ -423,6 +420,9 @@ fn read_pos(
     let mut week0: Option<u32> = None;
     for_each_line(&mut lines, warnings, |ln, text| {
         split_fields(text, &mut fields);
+        if src.skip_lines.is_some_and(|n| ln <= n) {
+            return Ok(());
+        }
         match fields.first() {
             None => return Ok(()),
             Some(&(s, _)) if text.get(s) == Some(&b'%') => {
@@ -548,6 +548,7 @@ mod tests {
             format: GnssFormat::RtklibPos { quality: vec![1] },
             decimate_s: None,
             time_offset_s: 0.0,
+            skip_lines: None,
         };
         let d = read_gnss(&src).unwrap();
         assert_eq!(d.gps_week, Some(2374));
@@ -579,6 +580,7 @@ mod tests {
             format: GnssFormat::RtklibPos { quality: vec![] },
             decimate_s: None,
             time_offset_s: -0.25,
+            skip_lines: None,
         };
         let d = read_gnss(&src).unwrap();
         assert_eq!(d.gps_week, Some(2374));
@@ -608,6 +610,7 @@ mod tests {
             format: GnssFormat::KfGins,
             decimate_s: None,
             time_offset_s: 0.0,
+            skip_lines: None,
         };
         let d = read_gnss(&src).unwrap();
         assert_eq!(d.gps_week, None);

@@ -21,31 +21,33 @@ const WHAT: &str = "t, heading [deg], std [deg]";
 /// Read a heading file; see the module documentation. A damaged last line is an
 /// error here; [`read_heading_report`] drops it with a warning.
 pub fn read_heading(path: &Path) -> Result<Vec<HeadingObs>, InputError> {
-    read(path, None)
+    read(path, None, None)
 }
 
 /// [`read_heading`], with a last line cut mid-write (no line end) dropped and a
 /// warning naming file and line pushed to `warnings`.
 pub fn read_heading_report(
     path: &Path,
+    skip_lines: Option<usize>,
     warnings: &mut Vec<String>,
 ) -> Result<Vec<HeadingObs>, InputError> {
-    read(path, Some(warnings))
+    read(path, skip_lines, Some(warnings))
 }
 
 fn read(
     path: &Path,
+    skip_lines: Option<usize>,
     mut warnings: Option<&mut Vec<String>>,
 ) -> Result<Vec<HeadingObs>, InputError> {
     let mut lines = LineReader::open(path)?;
     let mut fields = Vec::with_capacity(8);
     let mut out: Vec<HeadingObs> = Vec::new();
     let mut prev: Option<f64> = None;
-    let mut header = crate::fmt::SkipLines::default();
+    let mut header = crate::fmt::SkipLines::new(skip_lines);
     while let Some((ln, text)) = lines.next_line()? {
         let mut record = || -> Result<(), InputError> {
             split_fields(text, &mut fields);
-            if header.skip(text, &fields) {
+            if header.skip(ln, text, &fields) {
                 return Ok(());
             }
             if fields.len() != 3 {

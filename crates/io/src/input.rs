@@ -308,6 +308,9 @@ pub struct GnssSource {
     pub decimate_s: Option<f64>,
     /// Seconds added to every GNSS time tag.
     pub time_offset_s: f64,
+    /// Text fix files (KF-GINS, RTKLIB .pos): lines to skip at the top; None: a
+    /// first line with no number is a header (KF-GINS) or `%` lines (.pos).
+    pub skip_lines: Option<usize>,
 }
 
 /// What to write and how often.
@@ -401,6 +404,8 @@ pub enum OdometerFormat {
 pub struct OdometerSource {
     pub path: PathBuf,
     pub format: OdometerFormat,
+    /// Lines to skip at the top; None: a first line with no number is a header.
+    pub skip_lines: Option<usize>,
 }
 
 /// Where the dual-antenna heading comes from: 3 columns `t heading_deg std_deg`
@@ -410,6 +415,9 @@ pub struct HeadingSource {
     pub path: PathBuf,
     /// Some: an NMEA log (HDT, THS mode A; nmea.rs) instead of the 3-column text.
     pub nmea: Option<crate::nmea::NmeaOptions>,
+    /// 3-column text: lines to skip at the top; None: a first line with no number
+    /// is a header.
+    pub skip_lines: Option<usize>,
 }
 
 /// The aiding inputs on the IMU time scale that need no week alignment, read and

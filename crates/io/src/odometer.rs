@@ -65,11 +65,11 @@ fn read(
     let mut out = Vec::new();
     // previous record: time, cumulative pulses (pulse formats)
     let mut prev: Option<(f64, f64)> = None;
-    let mut header = crate::fmt::SkipLines::default();
+    let mut header = crate::fmt::SkipLines::new(src.skip_lines);
     while let Some((ln, text)) = lines.next_line()? {
         let mut record = || -> Result<(), InputError> {
             split_fields(text, &mut fields);
-            if header.skip(text, &fields) {
+            if header.skip(ln, text, &fields) {
                 return Ok(());
             }
             if fields.len() != ncols {

@@ -240,6 +240,7 @@ pub fn read_trajectory(
         format: gnss,
         decimate_s: None,
         time_offset_s: 0.0,
+        skip_lines: None,
     })?;
     Ok(Trajectory {
         format,

@@ -20,6 +20,7 @@ fn src(path: PathBuf, quantity: BaroQuantity, delay_s: f64) -> BaroSource {
         reference_pressure_pa: ISA_P0_PA,
         delay_s,
         format: Default::default(),
+        skip_lines: None,
     }
 }
 

@@ -41,6 +41,7 @@ fn odo(
     let r = read_odometer(&OdometerSource {
         path: p.clone(),
         format,
+        skip_lines: None,
     });
     (p, r)
 }
@@ -230,6 +231,7 @@ fn odometer_file_and_option_errors() {
     let e = read_odometer(&OdometerSource {
         path: p.clone(),
         format: SPEED,
+        skip_lines: None,
     })
     .unwrap_err();
     assert_eq!(e.path, p);

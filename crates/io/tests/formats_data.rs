@@ -78,6 +78,7 @@ fn kfgins_gnss_files() {
             format: GnssFormat::KfGins,
             decimate_s: None,
             time_offset_s: 0.0,
+            skip_lines: None,
         };
         let d = read_gnss(&src).unwrap();
         assert_eq!(d.fixes.len(), 3413, "{rel}");
@@ -106,6 +107,7 @@ fn drive_pos() {
         format: GnssFormat::RtklibPos { quality: vec![1] },
         decimate_s: None,
         time_offset_s: 0.0,
+        skip_lines: None,
     };
     let d = read_gnss(&src).unwrap();
     assert_eq!(d.fixes.len(), 2189);
@@ -152,6 +154,7 @@ fn walk_pos() {
         format: GnssFormat::RtklibPos { quality: vec![q] },
         decimate_s: None,
         time_offset_s: 0.0,
+        skip_lines: None,
     };
     assert_eq!(read_gnss(&src(1)).unwrap().fixes.len(), 349);
     assert_eq!(read_gnss(&src(2)).unwrap().fixes.len(), 187);

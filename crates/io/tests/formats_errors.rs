@@ -50,6 +50,7 @@ fn gnss(text: &str, name: &str, format: GnssFormat) -> (PathBuf, GnssSource) {
             format,
             decimate_s: None,
             time_offset_s: 0.0,
+            skip_lines: None,
         },
     )
 }
@@ -98,6 +99,7 @@ fn missing_files() {
         format: GnssFormat::KfGins,
         decimate_s: None,
         time_offset_s: 0.0,
+        skip_lines: None,
     })
     .unwrap_err();
     check(&e, &p, None, None, "cannot open: No such file or directory");
@@ -471,6 +473,7 @@ fn garbage_never_panics() {
                 format,
                 decimate_s: Some(1.0),
                 time_offset_s: 0.0,
+                skip_lines: None,
             });
         }
         let _ = read_nav(&p);

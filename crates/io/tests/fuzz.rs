@@ -176,6 +176,7 @@ fn check_gnss(p: &Path, format: GnssFormat) -> Result<(), String> {
         format,
         decimate_s: None,
         time_offset_s: 0.0,
+        skip_lines: None,
     };
     let Ok(d) = navfuse_io::gnss::read_gnss(&src) else {
         return Ok(());
@@ -248,6 +249,7 @@ fn check_odometer(p: &Path, format: OdometerFormat) -> Result<(), String> {
     let src = OdometerSource {
         path: p.to_path_buf(),
         format,
+        skip_lines: None,
     };
     let Ok(o) = navfuse_io::odometer::read_odometer(&src) else {
         return Ok(());
@@ -312,6 +314,7 @@ fn ulog(p: &Path) -> Result<(), String> {
         reference_pressure_pa: 101_325.0,
         delay_s: 0.0,
         format: navfuse_io::baro::BaroFormat::Ulog { multi_id: 0 },
+        skip_lines: None,
     };
     if let Ok(b) = navfuse_io::baro::read_baro(&src, &mut Vec::new()) {
         for s in &b {

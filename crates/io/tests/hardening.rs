@@ -34,6 +34,7 @@ fn gnss(p: &Path) -> GnssSource {
         format: GnssFormat::KfGins,
         decimate_s: None,
         time_offset_s: 0.0,
+        skip_lines: None,
     }
 }
 
@@ -245,7 +246,7 @@ fn heading_and_odometer_cut_last_line() {
         b"100.0 10.0 0.5\n101.0 11.0 0.5\n102.0 1",
     );
     let mut w = Vec::new();
-    let r = read_heading_report(&h, &mut w).unwrap();
+    let r = read_heading_report(&h, None, &mut w).unwrap();
     assert_eq!(r.len(), 2);
     assert!(
         w.len() == 1 && w[0].contains("cut_heading.txt:3: damaged last line dropped"),
@@ -256,17 +257,19 @@ fn heading_and_odometer_cut_last_line() {
         "mid_heading.txt",
         b"100.0 10.0 0.5\n101.0 x 0.5\n102.0 12.0 0.5\n",
     );
-    assert!(read_heading_report(&mid, &mut Vec::new()).is_err());
+    assert!(read_heading_report(&mid, None, &mut Vec::new()).is_err());
     let o = write("cut_odometer.txt", b"10.0 1.5\n10.1 1.6\n10.2 ");
     let src = OdometerSource {
         path: o,
         format: OdometerFormat::Speed {
             speed_is_mean: true,
         },
+        skip_lines: None,
     };
     let whole = OdometerSource {
         path: write("whole_odometer.txt", b"10.0 1.5\n10.1 1.6\n"),
         format: src.format.clone(),
+        skip_lines: None,
     };
     let mut w = Vec::new();
     assert_eq!(

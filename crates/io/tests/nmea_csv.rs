@@ -93,6 +93,7 @@ fn nmea_export_reads_back_to_its_precision() {
         format: GnssFormat::Nmea(NmeaOptions::default()),
         decimate_s: Some(1.0),
         time_offset_s: 0.0,
+        skip_lines: None,
     })
     .unwrap();
     assert_eq!(g.fixes.len(), 60);
@@ -164,6 +165,7 @@ fn csv_lla_with_header_and_iso_utc() {
         format: GnssFormat::Csv(o.clone()),
         decimate_s: None,
         time_offset_s: 0.0,
+        skip_lines: None,
     })
     .unwrap();
     assert_eq!(g.gps_week, Some(2374));
@@ -194,6 +196,7 @@ fn csv_lla_with_header_and_iso_utc() {
         format: GnssFormat::Csv(o),
         decimate_s: None,
         time_offset_s: 0.0,
+        skip_lines: None,
     })
     .unwrap_err()
     .to_string();
@@ -257,6 +260,7 @@ fn column_name_headers_are_skipped_with_the_file_line_numbers() {
         format: GnssFormat::KfGins,
         decimate_s: None,
         time_offset_s: 0.0,
+        skip_lines: None,
     };
     let e = read_gnss(&src).unwrap_err().to_string();
     assert!(e.contains("h_gnss.txt:3: field 'std_e'"), "{e}");
@@ -271,6 +275,7 @@ fn column_name_headers_are_skipped_with_the_file_line_numbers() {
         format: OdometerFormat::Speed {
             speed_is_mean: false,
         },
+        skip_lines: None,
     })
     .unwrap();
     assert_eq!(o.len(), 2);
@@ -281,8 +286,92 @@ fn column_name_headers_are_skipped_with_the_file_line_numbers() {
         format: OdometerFormat::Speed {
             speed_is_mean: false,
         },
+        skip_lines: None,
     })
     .unwrap_err()
     .to_string();
     assert!(e.contains("h_odo.csv:3"), "{e}");
+}
+
+/// `skip_lines` in `[gnss]` (KF-GINS, .pos), `[heading]`, `[odometer]` and `[baro]`:
+/// a preamble whose lines hold numbers (so no header detection could tell) is
+/// skipped, line numbers stay the file's, written back, refused where it does not
+/// apply.
+#[test]
+fn skip_lines_for_every_text_reader() {
+    let d = dir().join("skip_lines");
+    std::fs::create_dir_all(&d).unwrap();
+    let pre = "Logger v2.1 exported 2024-03-18\n3 channels, 10 Hz\n";
+    let w = |name: &str, body: &str| std::fs::write(d.join(name), format!("{pre}{body}")).unwrap();
+    w(
+        "gnss.txt",
+        "100 30 114 20 0.1 0.1 0.2\n101 30 114 20 0.1 0.1 0.2\n",
+    );
+    w(
+        "fix.pos",
+        "2024/03/18 00:00:00.000 30.0 114.0 20.0 1 10 0.01 0.01 0.02 0 0 0 0.0 0.0\n",
+    );
+    w("heading.txt", "100 10 0.5\n101 11 0.5\n");
+    w("odo.txt", "10.0 1.5\n10.1 1.6\n");
+    w("baro.txt", "10.0 101000\n10.1 x\n");
+    std::fs::write(d.join("imu.txt"), "").unwrap();
+    let toml = |gnss: &str| {
+        format!(
+            "[imu]\nfile = \"imu.txt\"\nformat = \"kf-gins\"\nrate_hz = 100\n\n\
+             [initial]\nposition_std_m = 1.0\nvelocity_std_mps = 0.1\nattitude_std_deg = [1, 1, 5]\n\n\
+             [imu_noise]\narw_deg_sqrth = 0.2\nvrw_mps_sqrth = 0.05\ngyro_bias_std_degph = 20\naccel_bias_std_mgal = 300\ngyro_scale_std_ppm = 1000\naccel_scale_std_ppm = 1000\ncorr_time_h = 1\n\n\
+             [gnss]\n{gnss}\nskip_lines = 2\n\n\
+             [heading]\nfile = \"heading.txt\"\nbaseline_m = [1, 0, 0]\nskip_lines = 2\n\n\
+             [odometer]\nfile = \"odo.txt\"\nformat = \"speed\"\nspeed_is_mean = false\nskip_lines = 2\n\n\
+             [baro]\nfile = \"baro.txt\"\nskip_lines = 2\n"
+        )
+    };
+    let load = |name: &str, text: &str| {
+        let p = d.join(name);
+        std::fs::write(&p, text).unwrap();
+        navfuse_io::config::load(&p)
+    };
+    let c = load(
+        "run.toml",
+        &toml("file = \"gnss.txt\"\nformat = \"kf-gins\""),
+    )
+    .unwrap();
+    let g = read_gnss(c.gnss.as_ref().unwrap()).unwrap();
+    assert_eq!(g.fixes.len(), 2);
+    let h = c.heading.as_ref().unwrap();
+    let hv = navfuse_io::heading::read_heading_report(&h.path, h.skip_lines, &mut Vec::new());
+    assert_eq!(hv.unwrap().len(), 2);
+    let o = navfuse_io::odometer::read_odometer(c.odometer.as_ref().unwrap()).unwrap();
+    assert_eq!(o.len(), 2);
+    // The barometer's error names the file's own line 4.
+    let e = navfuse_io::baro::read_baro(c.baro.as_ref().unwrap(), &mut Vec::new())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("baro.txt:4"), "{e}");
+    // Without skip_lines the preamble's first line is taken as a header and the
+    // second is an error at line 2.
+    let src = GnssSource {
+        skip_lines: None,
+        ..c.gnss.clone().unwrap()
+    };
+    let e = read_gnss(&src).unwrap_err().to_string();
+    assert!(e.contains("gnss.txt:2"), "{e}");
+    // Written back.
+    let back = c.to_toml_string();
+    assert_eq!(back.matches("skip_lines = 2").count(), 4, "{back}");
+    // .pos.
+    let c = load(
+        "run_pos.toml",
+        &toml("file = \"fix.pos\"\nformat = \"rtklib-pos\""),
+    )
+    .unwrap();
+    assert_eq!(read_gnss(c.gnss.as_ref().unwrap()).unwrap().fixes.len(), 1);
+    // Where it does not apply.
+    let e = load(
+        "run_nmea.toml",
+        &toml("file = \"gnss.txt\"\nformat = \"nmea\"\ndate = \"2024-03-18\""),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("gnss.skip_lines"), "{e}");
 }

@@ -89,6 +89,7 @@ fn sitl_log_topics_times_and_inputs() {
         format: GnssFormat::Ulog { multi_id: 0 },
         decimate_s: None,
         time_offset_s: 0.0,
+        skip_lines: None,
     })
     .unwrap();
     let f0 = g.fixes[0];
@@ -119,6 +120,7 @@ fn sitl_log_topics_times_and_inputs() {
             reference_pressure_pa: 101_325.0,
             delay_s: 0.0,
             format: BaroFormat::Ulog { multi_id: 0 },
+            skip_lines: None,
         },
         &mut w,
     )
@@ -173,6 +175,7 @@ fn hardware_log_imu_only_on_boot_time() {
         format: GnssFormat::Ulog { multi_id: 0 },
         decimate_s: None,
         time_offset_s: 0.0,
+        skip_lines: None,
     })
     .unwrap_err()
     .to_string();
@@ -428,6 +431,7 @@ fn huge_timestamps_do_not_wrap() {
             format: GnssFormat::Ulog { multi_id: 0 },
             decimate_s: None,
             time_offset_s: 0.0,
+            skip_lines: None,
         }) {
             assert!(g.fixes.windows(2).all(|w| w[1].t > w[0].t));
         }

@@ -165,6 +165,7 @@ pub fn run_config(sc: &Scenario, dir: &Path) -> RunConfig {
                 format: GnssFormat::KfGins,
                 decimate_s: None,
                 time_offset_s: 0.0,
+                skip_lines: None,
             });
         } else if gs_.raw {
             // Raw observations only: tight coupling on them, with every system
@@ -187,6 +188,7 @@ pub fn run_config(sc: &Scenario, dir: &Path) -> RunConfig {
                 }),
                 decimate_s: None,
                 time_offset_s: 0.0,
+                skip_lines: None,
             });
         }
         if let Some(h) = &gs_.heading {
@@ -194,6 +196,7 @@ pub fn run_config(sc: &Scenario, dir: &Path) -> RunConfig {
             heading = Some(HeadingSource {
                 path: dir.join("heading.txt"),
                 nmea: None,
+                skip_lines: None,
             });
         }
     }
@@ -212,6 +215,7 @@ pub fn run_config(sc: &Scenario, dir: &Path) -> RunConfig {
             format: OdometerFormat::Navfuse {
                 meters_per_pulse: o.meters_per_pulse,
             },
+            skip_lines: None,
         });
         nav.vehicle = VehicleOptions {
             mounting_rpy: Vector3::zeros(),
@@ -240,6 +244,7 @@ pub fn run_config(sc: &Scenario, dir: &Path) -> RunConfig {
             reference_pressure_pa: b.reference_pressure_pa,
             delay_s: b.delay_s,
             format: Default::default(),
+            skip_lines: None,
         }
     });
     RunConfig {

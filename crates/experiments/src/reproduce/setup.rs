@@ -125,6 +125,7 @@ pub(crate) fn seed004_odometer(cfg: &mut RunConfig, sc: &Scenario) {
         format: navfuse_io::input::OdometerFormat::Navfuse {
             meters_per_pulse: k_od,
         },
+        skip_lines: None,
     });
     cfg.nav.odometer.enabled = true;
     cfg.nav.odometer.with_nhc = true;
@@ -161,6 +162,7 @@ pub(crate) fn seed000_gnss(cfg: &mut RunConfig, coupling: Coupling, dgps: bool) 
         }),
         decimate_s: None,
         time_offset_s: 0.0,
+        skip_lines: None,
     });
     cfg.nav.gnss.lever_arm_b = Vector3::zeros();
     cfg.nav.tight.enabled = coupling == Coupling::Tight;
@@ -195,5 +197,6 @@ pub(crate) fn heading_source(gnss_path: &Path) -> navfuse_io::input::HeadingSour
     navfuse_io::input::HeadingSource {
         path: gnss_path.with_file_name("heading.txt"),
         nmea: None,
+        skip_lines: None,
     }
 }

@@ -30,6 +30,8 @@ pub(super) struct TBaro {
     /// `baro.format = "ulog"`: the topic instance (multi_id).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) ulog_instance: Option<u8>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) skip_lines: Option<usize>,
     /// What the value column holds (default: pressure in Pa).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) quantity: Option<BaroQuantity>,
@@ -62,6 +64,12 @@ pub(super) fn convert(b: &TBaro, base: &Path) -> KResult<(BaroSource, BaroOption
         }
         TBaroFormat::Text => BaroFormat::Text,
     };
+    if b.skip_lines.is_some() && format != BaroFormat::Text {
+        return Err(super::error::kerr(
+            "baro.skip_lines",
+            "applies only to text files (baro.format = \"text\")",
+        ));
+    }
     let src = BaroSource {
         format,
         path: file_key(base, "baro.file", &b.file)?,
@@ -74,6 +82,7 @@ pub(super) fn convert(b: &TBaro, base: &Path) -> KResult<(BaroSource, BaroOption
             ISA_P0_PA,
         )?,
         delay_s: opt_or("baro.delay_s", b.delay_s, finite, SAME, 0.0)?,
+        skip_lines: b.skip_lines,
     };
     let lever_arm_b = match &b.lever_arm_m {
         Some(l) => vec3(v3("baro.lever_arm_m", l)?),
@@ -111,6 +120,7 @@ pub(super) fn to_toml(src: Option<&BaroSource>, o: &BaroOptions, w: &PathWriter)
             BaroFormat::Ulog { multi_id } => Some(multi_id),
             BaroFormat::Text => None,
         },
+        skip_lines: src.skip_lines,
         quantity: Some(src.quantity),
         reference_pressure_pa: Some(src.reference_pressure_pa),
         delay_s: Some(src.delay_s),

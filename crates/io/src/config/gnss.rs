@@ -99,6 +99,8 @@ pub(super) struct TGnss {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) ulog_instance: Option<u8>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) skip_lines: Option<usize>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) decimate_s: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) time_offset_s: Option<f64>,
@@ -168,6 +170,7 @@ impl TGnss {
             tight: None,
             quality: None,
             ulog_instance: None,
+            skip_lines: None,
             decimate_s: None,
             time_offset_s: None,
             lever_arm_m: None,
@@ -318,11 +321,20 @@ pub(super) fn convert(
         .map(|d| positive("gnss.decimate_s", d))
         .transpose()?;
     let time_offset_s = finite("gnss.time_offset_s", g.time_offset_s.unwrap_or(0.0))?;
+    if g.skip_lines.is_some()
+        && !matches!(format, GnssFormat::KfGins | GnssFormat::RtklibPos { .. })
+    {
+        return Err(kerr(
+            "gnss.skip_lines",
+            "applies only to gnss.format = \"kf-gins\" or \"rtklib-pos\" (csv: gnss.csv.skip_lines; NMEA and binary formats need none)",
+        ));
+    }
     let src = GnssSource {
         path,
         format,
         decimate_s,
         time_offset_s,
+        skip_lines: g.skip_lines,
     };
 
     let d = GnssOptions::default();
@@ -524,6 +536,7 @@ pub(super) fn to_toml(
             GnssFormat::Ulog { multi_id } => Some(multi_id),
             _ => None,
         },
+        skip_lines: g.skip_lines,
         decimate_s: g.decimate_s,
         time_offset_s: Some(g.time_offset_s),
         lever_arm_m: Some(arr3(&go.lever_arm_b).to_vec()),

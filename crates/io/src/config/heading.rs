@@ -25,6 +25,8 @@ pub(super) struct THeading {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) date: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) skip_lines: Option<usize>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) baseline_m: Option<Vec<f64>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) std_deg: Option<f64>,
@@ -88,8 +90,18 @@ pub(super) fn convert(
                 }
                 THeadingFormat::Text => None,
             };
+            if nmea.is_some() && h.skip_lines.is_some() {
+                return Err(kerr(
+                    "heading.skip_lines",
+                    "applies only to the 3-column text (heading.format = \"text\")",
+                ));
+            }
             (
-                Some(HeadingSource { path, nmea }),
+                Some(HeadingSource {
+                    path,
+                    nmea,
+                    skip_lines: h.skip_lines,
+                }),
                 Some(vec3(b)),
                 std_override,
             )
@@ -100,6 +112,7 @@ pub(super) fn convert(
                 ("heading.std_deg", h.std_deg.is_some()),
                 ("heading.format", h.format.is_some()),
                 ("heading.date", h.date.is_some()),
+                ("heading.skip_lines", h.skip_lines.is_some()),
             ] {
                 if given {
                     return Err(kerr(
@@ -152,6 +165,7 @@ pub(super) fn to_toml(
         date: dual
             .and_then(|h| h.nmea.as_ref())
             .and_then(super::gnss_text::nmea_date_to_toml),
+        skip_lines: dual.and_then(|h| h.skip_lines),
         baseline_m: dual.and(hd.baseline_b).map(|b| arr3(&b).to_vec()),
         std_deg: dual.and(hd.dual_antenna_std_override).map(|x| DEG.user(x)),
         course_over_ground: Some(hd.course_over_ground),

@@ -35,6 +35,8 @@ pub(super) struct TOdometer {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) speed_is_mean: Option<bool>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) skip_lines: Option<usize>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) std_mps: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) scale_ppm: Option<f64>,
@@ -130,7 +132,12 @@ pub(super) fn convert(o: &TOdometer, base: &Path) -> KResult<(OdometerSource, Od
             d.gate_probability,
         )?,
     };
-    Ok((OdometerSource { path, format }, opts))
+    let src = OdometerSource {
+        path,
+        format,
+        skip_lines: o.skip_lines,
+    };
+    Ok((src, opts))
 }
 
 /// An odometer is configured by its file; options without one cannot be written.
@@ -154,6 +161,7 @@ pub(super) fn to_toml(
         format,
         meters_per_pulse,
         speed_is_mean,
+        skip_lines: src.skip_lines,
         std_mps: Some(od.std_mps),
         scale_ppm: Some(PPM.user(od.scale_initial)),
         scale_std_ppm: Some(PPM.user(od.scale_std)),

@@ -37,7 +37,7 @@ fn read_part(
 ) -> Result<Rows, InputError> {
     let mut lines = LineReader::open(path)?;
     let mut fields = Vec::with_capacity(16);
-    let mut skip = SkipLines::default();
+    let mut skip = SkipLines::new(skip_lines);
     let mut out = Rows {
         lines: Vec::new(),
         values: Vec::new(),
@@ -45,11 +45,7 @@ fn read_part(
     let need = cols.iter().map(|c| c.0).max().unwrap_or(0) + 1;
     while let Some((ln, text)) = lines.next_line()? {
         split_fields(text, &mut fields);
-        let skipped = match skip_lines {
-            Some(n) => ln <= n || crate::fmt::is_comment_line(text, &fields),
-            None => skip.skip(text, &fields),
-        };
-        if skipped {
+        if skip.skip(ln, text, &fields) {
             continue;
         }
         if fields.len() < need {
