@@ -193,6 +193,57 @@ fn is_sep(b: u8) -> bool {
     is_ws(b) || b == b','
 }
 
+/// Split `line` on the one byte `delim` only (a declared CSV delimiter: `;` with
+/// decimal commas, `,` with spaces inside fields), each field trimmed of spaces and
+/// tabs. A blank line has no fields; a trailing delimiter adds none; `a;;b` has an
+/// empty middle field. A space or tab delimiter splits on runs of spaces and tabs
+/// (aligned columns), commas kept inside fields.
+pub fn split_on(line: &[u8], delim: u8, out: &mut Vec<(usize, usize)>) {
+    out.clear();
+    if line.iter().all(|&b| is_ws(b)) {
+        return;
+    }
+    if is_ws(delim) {
+        let mut i = 0;
+        while i < line.len() {
+            if is_ws(line[i]) {
+                i += 1;
+                continue;
+            }
+            let a = i;
+            while i < line.len() && !is_ws(line[i]) {
+                i += 1;
+            }
+            out.push((a, i));
+        }
+        return;
+    }
+    let mut start = 0;
+    let n = line.len();
+    loop {
+        let end = line[start..]
+            .iter()
+            .position(|&b| b == delim)
+            .map_or(n, |k| start + k);
+        let (mut a, mut b) = (start, end);
+        while a < b && is_ws(line[a]) {
+            a += 1;
+        }
+        while b > a && is_ws(line[b - 1]) {
+            b -= 1;
+        }
+        let last = end >= n;
+        // A trailing delimiter (nothing but spaces after it) adds no field.
+        if !(last && a == b && !out.is_empty()) {
+            out.push((a, b));
+        }
+        if last {
+            break;
+        }
+        start = end + 1;
+    }
+}
+
 /// Split a line into fields (byte ranges). Runs of spaces and tabs separate fields;
 /// a comma (with optional whitespace around it) also separates them, so `a,,b` has an
 /// empty middle field. Leading and trailing separators make no fields, except a

@@ -164,6 +164,13 @@ struct Row<'a> {
     fields: &'a [(usize, usize)],
 }
 
+/// `t` with commas turned into points.
+fn decimal_points(t: &[u8]) -> Vec<u8> {
+    t.iter()
+        .map(|&b| if b == b',' { b'.' } else { b })
+        .collect()
+}
+
 impl Row<'_> {
     fn name(name: &str, k: usize) -> String {
         format!("{name} (column {})", k + 1)
@@ -175,6 +182,18 @@ impl Row<'_> {
         match parse_f64(t) {
             Some(v) if v.is_finite() => Ok(v),
             Some(v) => Err(InputError::not_finite(self.path, self.ln, &n, v)),
+            // "30,5": a decimal comma (the field split on another delimiter).
+            None if t.contains(&b',') && parse_f64(&decimal_points(t)).is_some() => {
+                Err(InputError::at_field(
+                    self.path,
+                    self.ln,
+                    &n,
+                    format!(
+                        "found \"{}\", a decimal comma: navfuse reads decimal points (convert the file, e.g. sed 's/,/./g' when the delimiter is not a comma)",
+                        String::from_utf8_lossy(t)
+                    ),
+                ))
+            }
             None => Err(InputError::not_a_number(self.path, self.ln, &n, t)),
         }
     }
@@ -273,7 +292,6 @@ pub fn read_csv_gnss(
         .join(" ");
     let mut lines = LineReader::open(path)?;
     let mut fields = Vec::with_capacity(16);
-    let mut buf: Vec<u8> = Vec::new();
     let mut out = Vec::new();
     let mut prev: Option<f64> = None;
     let mut week0: Option<i64> = None;
@@ -283,15 +301,11 @@ pub fn read_csv_gnss(
         if o.skip_lines.is_some_and(|n| ln <= n) {
             return Ok(());
         }
-        let text: &[u8] = match o.delimiter {
-            Some(d) if d != b',' && d != b' ' && d != b'\t' => {
-                buf.clear();
-                buf.extend(raw.iter().map(|&b| if b == d { b',' } else { b }));
-                &buf
-            }
-            _ => raw,
-        };
-        split_fields(text, &mut fields);
+        let text: &[u8] = raw;
+        match o.delimiter {
+            Some(d) => crate::fmt::split_on(text, d, &mut fields),
+            None => split_fields(text, &mut fields),
+        }
         if crate::fmt::is_comment_line(text, &fields) {
             return Ok(());
         }

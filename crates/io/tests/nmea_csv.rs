@@ -204,6 +204,50 @@ fn csv_lla_with_header_and_iso_utc() {
     assert!(e.contains("bad.csv:5: field 'lat (column 2)'"), "{e}");
 }
 
+/// A declared delimiter is the only separator: a decimal-comma export with `;` is an
+/// error naming the field and the likely mistake (not lat 30, lon 5), and ISO times
+/// with a space read with `delimiter = ","`.
+#[test]
+fn csv_declared_delimiter_is_the_only_separator() {
+    let src = |p: PathBuf, o: CsvGnssOptions| GnssSource {
+        path: p,
+        format: GnssFormat::Csv(o),
+        decimate_s: None,
+        time_offset_s: 0.0,
+        skip_lines: None,
+    };
+    let p = write_csv(
+        "comma.csv",
+        "t;lat;lon;h\n",
+        |k| format!("{}.0;30,5;114,4;8,2\n", 100 + k),
+        3,
+    );
+    let mut o = CsvGnssOptions::lla(0, [1, 2, 3]);
+    o.delimiter = Some(b';');
+    o.position_std_m = Some([1.0, 1.0, 2.0]);
+    let e = read_gnss(&src(p, o.clone())).unwrap_err().to_string();
+    assert!(
+        e.contains("comma.csv:2: field 'lat (column 2)'") && e.contains("decimal comma"),
+        "{e}"
+    );
+    let p = write_csv(
+        "iso_space.csv",
+        "time,lat,lon,h\n",
+        |k| format!("2025-07-08 12:00:0{k}.5 , 30.5, 114.4, 8.2\n"),
+        3,
+    );
+    o.delimiter = Some(b',');
+    o.time_scale = CsvTimeScale::IsoGpst;
+    let g = read_gnss(&src(p, o)).unwrap();
+    assert_eq!(g.fixes.len(), 3);
+    assert!(
+        (g.fixes[2].t - (2.0 * 86400.0 + 12.0 * 3600.0 + 2.5)).abs() < 1e-9,
+        "{}",
+        g.fixes[2].t
+    );
+    assert!((g.fixes[0].lla.z - 8.2).abs() < 1e-12);
+}
+
 #[test]
 fn csv_ecef_week_sow_skip_lines() {
     let lla = Vector3::new(30.5f64.to_radians(), 114.4f64.to_radians(), 20.0);

@@ -106,13 +106,19 @@ pub(super) fn csv(
     };
     let delimiter = match c.delimiter.as_deref() {
         None | Some("auto") => None,
-        Some(d) if d.len() == 1 && d.is_ascii() => d.bytes().next(),
         Some("\\t") | Some("tab") => Some(b'\t'),
+        Some(d)
+            if d.len() == 1
+                && d.is_ascii()
+                && !d.bytes().any(|b| b.is_ascii_alphanumeric() || b".-+#%\"".contains(&b)) =>
+        {
+            d.bytes().next()
+        }
         Some(d) => {
             return Err(kerr(
                 "gnss.csv.delimiter",
                 format!(
-                "expected one ASCII character (\",\", \";\", \"\\t\", ...) or \"auto\", got {d:?}"
+                "expected one ASCII character that cannot be part of a number or a comment (\",\", \";\", \"|\", \" \", \"\\t\", ...) or \"auto\", got {d:?}"
             ),
             ))
         }

@@ -67,6 +67,48 @@ impl UbxLog {
     }
 }
 
+/// NAV-PVT fixes (iTOW in `t`) on one time scale: seconds of the week of the first
+/// fix, counting on past a week rollover. Each fix's week is the one that puts it
+/// nearest the time reference it came with (the latest RAWX epoch or fully resolved
+/// NAV-PVT date), else the first reference of the log; without any, a fall of more
+/// than half a week in iTOW is a rollover. Fixes not after the previous one are
+/// dropped (counted in the third value).
+fn unwrap_pvt_weeks(pvt: Vec<(GnssFix, Option<(i32, f64)>)>) -> (Vec<GnssFix>, Option<i32>, usize) {
+    const WEEK: f64 = 604_800.0;
+    let first_ref = pvt.iter().find_map(|(_, r)| *r);
+    let mut out: Vec<GnssFix> = Vec::with_capacity(pvt.len());
+    let mut week0: Option<i32> = None;
+    let mut prev_abs: Option<f64> = None;
+    let mut dropped = 0;
+    for (fx, r) in pvt {
+        let abs = match r.or(first_ref) {
+            Some((w, tow)) => {
+                let w = w as f64 + ((tow - fx.t) / WEEK).round();
+                w * WEEK + fx.t
+            }
+            // No week anywhere: weeks counted from 0 by rollovers.
+            None => match prev_abs {
+                Some(p) => {
+                    let w = ((p - fx.t) / WEEK).round();
+                    w * WEEK + fx.t
+                }
+                None => fx.t,
+            },
+        };
+        if prev_abs.is_some_and(|p| abs <= p) {
+            dropped += 1;
+            continue;
+        }
+        prev_abs = Some(abs);
+        let w0 = *week0.get_or_insert_with(|| (abs / WEEK).floor() as i32);
+        out.push(GnssFix {
+            t: abs - f64::from(w0) * WEEK,
+            ..fx
+        });
+    }
+    (out, week0.filter(|_| first_ref.is_some()), dropped)
+}
+
 /// Read a UBX file. Only an unreadable file is an error.
 pub fn read_ubx(path: &Path) -> Result<UbxLog, InputError> {
     let data = std::fs::read(path).map_err(|e| InputError::read(path, &e))?;
@@ -83,7 +125,10 @@ pub fn decode_ubx(data: &[u8], name: &str) -> UbxLog {
     // The receiver's week: RAWX, else the first NAV-PVT UTC date.
     let mut week: Option<i32> = None;
     let mut pvt_week: Option<i32> = None;
-    let mut pvt_fixes: Vec<GnssFix> = Vec::new();
+    // The latest (week, time of week) known, from RAWX or a NAV-PVT UTC date, and
+    // each NAV-PVT fix with the reference known when it came.
+    let mut time_ref: Option<(i32, f64)> = None;
+    let mut pvt_fixes: Vec<(GnssFix, Option<(i32, f64)>)> = Vec::new();
     let mut last_t: Option<navfuse_gnss::GpsTime> = None;
     for f in &frames {
         let res = match (f.class, f.id) {
@@ -96,16 +141,18 @@ pub fn decode_ubx(data: &[u8], name: &str) -> UbxLog {
                 }
                 last_t = Some(e.t);
                 week = Some(e.t.week);
+                time_ref = Some((e.t.week, e.t.sow));
                 log.epochs.push(e);
                 Ok(())
             }),
             (0x02, 0x13) => sf.decode(f.payload, week.or(pvt_week)),
             (0x01, 0x07) => pvt::decode(f.payload).map(|p| {
-                if pvt_week.is_none() {
-                    pvt_week = p.utc.and_then(|u| pvt::week_from_utc(u, p.itow_s));
+                if let Some(w) = p.utc.and_then(|u| pvt::week_from_utc(u, p.itow_s)) {
+                    pvt_week = pvt_week.or(Some(w));
+                    time_ref = Some((w, p.itow_s));
                 }
                 match p.fix {
-                    Some(fx) => pvt_fixes.push(fx),
+                    Some(fx) => pvt_fixes.push((fx, time_ref)),
                     None => log.pvt_invalid += 1,
                 }
             }),
@@ -118,17 +165,10 @@ pub fn decode_ubx(data: &[u8], name: &str) -> UbxLog {
             malformed.push(format!("{name}: byte {}: {why}: message skipped", f.offset));
         }
     }
-    // Fixes in time order only (a repeated or backwards iTOW is dropped).
-    let mut prev: Option<f64> = None;
-    for fx in pvt_fixes {
-        if prev.is_some_and(|p| fx.t <= p) {
-            log.pvt_invalid += 1;
-            continue;
-        }
-        prev = Some(fx.t);
-        log.fixes.push(fx);
-    }
-    log.fix_week = log.epochs.first().map(|e| e.t.week).or(pvt_week);
+    let (fixes, fix_week, dropped) = unwrap_pvt_weeks(pvt_fixes);
+    log.fixes = fixes;
+    log.fix_week = fix_week;
+    log.pvt_invalid += dropped;
     log.leap_seconds = raw.leap_seconds;
     log.header.glonass_channels = raw.glonass_channels.clone();
     log.rawx = raw.counts.clone();
@@ -163,4 +203,57 @@ pub fn decode_ubx(data: &[u8], name: &str) -> UbxLog {
     }
     log.scan = scan;
     log
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector3;
+
+    fn fix(t: f64) -> GnssFix {
+        GnssFix {
+            t,
+            lla: Vector3::zeros(),
+            std_ned: Vector3::repeat(1.0),
+            vel_ned: None,
+            vel_std_ned: None,
+        }
+    }
+
+    /// Fixes across a GPS week rollover keep counting; the week is the reference's
+    /// even when NAV-PVT starts before RAWX in the previous week.
+    #[test]
+    fn nav_pvt_fixes_across_a_week_rollover() {
+        let ts = [604_798.0, 604_799.0, 0.0, 1.0, 1.0, 2.0];
+        // No reference for the first two (RAWX starts in the new week, 2300).
+        let refs = [None, None, Some((2300, 0.0)), Some((2300, 1.0)), None, None];
+        let pvt = ts.iter().zip(refs).map(|(&t, r)| (fix(t), r)).collect();
+        let (f, week, dropped) = unwrap_pvt_weeks(pvt);
+        let t: Vec<f64> = f.iter().map(|x| x.t).collect();
+        assert_eq!(week, Some(2299));
+        assert_eq!(
+            t,
+            vec![604_798.0, 604_799.0, 604_800.0, 604_801.0, 604_802.0]
+        );
+        assert_eq!(dropped, 1); // the repeated 1.0
+                                // No week anywhere: rollovers still counted.
+        let pvt = [604_799.0, 0.5, 200_000.0, 400_000.0, 604_799.5, 3.0, 2.0]
+            .iter()
+            .map(|&t| (fix(t), None))
+            .collect();
+        let (f, week, dropped) = unwrap_pvt_weeks(pvt);
+        let t: Vec<f64> = f.iter().map(|x| x.t).collect();
+        assert_eq!((week, dropped), (None, 1)); // 2.0 after 3.0
+        assert_eq!(
+            t,
+            vec![
+                604_799.0,
+                604_800.5,
+                804_800.0,
+                1_004_800.0,
+                1_209_599.5,
+                1_209_603.0
+            ]
+        );
+    }
 }

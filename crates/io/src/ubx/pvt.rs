@@ -13,7 +13,8 @@ pub const LEN: usize = 92;
 /// the receiver marks it invalid.
 pub struct Pvt {
     pub itow_s: f64,
-    /// UTC date and time (when validDate and validTime): year, month, day, h, m, s.
+    /// UTC date and time (when validDate, validTime and fullyResolved): year, month,
+    /// day, h, m, s.
     pub utc: Option<(i32, u32, u32, u32, u32, u32)>,
     pub fix: Option<GnssFix>,
 }
@@ -25,7 +26,8 @@ pub fn decode(p: &[u8]) -> Result<Pvt, String> {
     }
     let itow_s = f64::from(u32_at(p, 0)) * 1e-3;
     let valid = p[11];
-    let utc = (valid & 3 == 3).then(|| {
+    // validDate, validTime and fullyResolved: a date the receiver vouches for.
+    let utc = (valid & 7 == 7).then(|| {
         (
             i32::from(u16_at(p, 4)),
             u32::from(p[6]),
