@@ -116,7 +116,7 @@ fn hardware_imu_only_log_levels_like_ekf2() {
     );
     // EKF2's attitude over the levelling window (boot seconds, as navfuse's times).
     let u = Ulog::parse(std::fs::read(&log).unwrap()).unwrap();
-    assert_eq!(ulog::TimeMap::of(&u, 0).week, None);
+    assert_eq!(ulog::TimeMap::of(&u).week, None);
     let a = u.topic("vehicle_attitude", 0).unwrap();
     let q: Vec<_> = (0..4)
         .map(|i| a.field(&format!("q[{i}]")).unwrap().clone())

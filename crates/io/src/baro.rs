@@ -60,7 +60,7 @@ pub fn read_baro(
     let path = src.path.as_path();
     if let BaroFormat::Ulog { multi_id } = src.format {
         let u = crate::ulog::open(path, warnings)?;
-        let map = crate::ulog::TimeMap::of(&u, 0);
+        let map = crate::ulog::TimeMap::of(&u);
         let p = crate::ulog::baro_pressures(path, &u, multi_id, &map)?;
         return Ok(p
             .into_iter()

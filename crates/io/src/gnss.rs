@@ -389,7 +389,7 @@ fn read_ulog(
     warnings: &mut Vec<String>,
 ) -> Result<(Vec<Epoch>, Option<u32>), InputError> {
     let u = crate::ulog::open(path, warnings)?;
-    let map = crate::ulog::TimeMap::of(&u, multi_id);
+    let map = crate::ulog::TimeMap::of(&u);
     let (fixes, _) = crate::ulog::gnss_fixes(path, &u, multi_id, &map)?;
     let epochs = fixes
         .into_iter()

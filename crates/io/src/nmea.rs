@@ -14,8 +14,9 @@
 //!   A time of day that goes back without a new RMC date is the next day.
 //! - UTC -> GPS time: + GPS-UTC leap seconds of the epoch's GPS week
 //!   (`navfuse_core::time::leap_seconds`).
-//! - A fix is an epoch with a GGA of quality > 0 (quality 0 = no fix: counted and
-//!   skipped). Height = GGA altitude (above the geoid) + geoid separation = the
+//! - A fix is an epoch with a GGA of quality 1-5 (0 = no fix, 6 = dead reckoning, 7 =
+//!   manual input, 8 = simulator: counted and skipped). Lines without `$` or `!`
+//!   (a preamble, binary messages of a mixed log) are counted and skipped. Height = GGA altitude (above the geoid) + geoid separation = the
 //!   ellipsoidal height GnssFix holds.
 //! - Velocity (horizontal only): RMC speed and course (status A), else VTG. The
 //!   vertical velocity is unknown: it is given as 0 with a std of
@@ -70,8 +71,11 @@ pub struct NmeaData {
     pub sentences: usize,
     /// Sentences rejected (bad checksum, unparsable).
     pub rejected: usize,
-    /// Epochs with GGA quality 0 (no fix).
+    /// Epochs with GGA quality 0 (no fix), or 6, 7, 8 (dead reckoning, manual
+    /// input, simulation: no GNSS measurement).
     pub no_fix: usize,
+    /// Lines without a sentence (no `$` or `!`), skipped.
+    pub non_nmea_lines: usize,
     /// Epochs without GGA (no height): no fix made.
     pub without_gga: usize,
     /// Fixes whose std is the HDOP guess.
@@ -116,6 +120,11 @@ pub fn read_nmea(path: &Path, opt: &NmeaOptions) -> Result<NmeaData, InputError>
     while let Some((ln, text)) = lines.next_line()? {
         let t = trim(text);
         if t.is_empty() || t.first() == Some(&b'#') {
+            continue;
+        }
+        // Not NMEA (a logger's preamble, binary messages of a mixed log): skipped.
+        if !t.iter().any(|&c| c == b'$' || c == b'!') {
+            out.non_nmea_lines += 1;
             continue;
         }
         match parse_sentence(path, ln, t) {
@@ -165,6 +174,22 @@ pub fn read_nmea(path: &Path, opt: &NmeaOptions) -> Result<NmeaData, InputError>
         out.warnings.push(format!(
             "{}: {untimed_before_first} sentences before the first timed sentence (GGA, RMC, GST) skipped",
             path.display()
+        ));
+    }
+    if out.non_nmea_lines > 0 {
+        out.warnings.push(format!(
+            "{}: {} lines without an NMEA sentence ('$' or '!') skipped",
+            path.display(),
+            out.non_nmea_lines
+        ));
+    }
+    if out.sentences == 0 && out.rejected == 0 && out.non_nmea_lines > 0 {
+        return Err(InputError::new(
+            path,
+            format!(
+                "no NMEA sentence in {} lines (none has '$'): expected an NMEA 0183 log",
+                out.non_nmea_lines
+            ),
         ));
     }
     if out.rejected > out.sentences {
@@ -219,7 +244,7 @@ pub fn read_nmea(path: &Path, opt: &NmeaOptions) -> Result<NmeaData, InputError>
             out.without_gga += 1;
             continue;
         };
-        if g.quality == 0 {
+        if matches!(g.quality, 0 | 6..=8) {
             out.no_fix += 1;
             continue;
         }
@@ -258,7 +283,7 @@ pub fn read_nmea(path: &Path, opt: &NmeaOptions) -> Result<NmeaData, InputError>
     }
     if out.no_fix > 0 {
         out.warnings.push(format!(
-            "{}: {} epochs with GGA quality 0 (no fix) skipped",
+            "{}: {} epochs with GGA quality 0 (no fix) or 6-8 (dead reckoning, manual, simulator) skipped",
             path.display(),
             out.no_fix
         ));
@@ -287,7 +312,7 @@ fn resolve_days(path: &Path, epochs: &mut [Epoch], opt: &NmeaOptions) -> Result<
         (None, None) => {
             return Err(InputError::new(
                 path,
-                "no RMC sentence gives the date: set gnss.date = \"YYYY-MM-DD\" (the UTC date of the first epoch)",
+                "no RMC sentence gives the date: set date = \"YYYY-MM-DD\" (the UTC date of the first epoch) in the section that names this file (gnss.date or heading.date)",
             )
             .with_field("date"))
         }

@@ -114,12 +114,11 @@ fn nmea_line_numbers_of_malformed_sentences() {
     let d = read_nmea(&p, &NmeaOptions::default()).unwrap();
     let w = d.warnings.join("\n");
     println!("{w}");
-    assert_eq!(d.rejected, 3, "{w}");
+    assert_eq!(d.rejected, 2, "{w}");
     assert!(w.contains("malformed.nmea:3: checksum mismatch"), "{w}");
-    assert!(
-        w.contains("malformed.nmea:4: expected an NMEA sentence"),
-        "{w}"
-    );
+    // A line with no sentence in it is skipped and counted, not a rejected sentence.
+    assert_eq!(d.non_nmea_lines, 1);
+    assert!(w.contains("1 lines without an NMEA sentence"), "{w}");
     assert!(
         w.contains("malformed.nmea:5: field 'GGA hemisphere'"),
         "{w}"
@@ -127,6 +126,20 @@ fn nmea_line_numbers_of_malformed_sentences() {
     assert_eq!(d.fixes.len(), 3);
     // 20.0 m above the geoid, geoid 10 m below the ellipsoid: 10 m ellipsoidal.
     assert_eq!(d.fixes[0].lla.z, 10.0);
+    // GGA quality 6 (dead reckoning) is no GNSS fix; a file with no sentence at all
+    // is an error.
+    let dr = text.replace(
+        "E,1,08,1.0,20.0,M,-10.0,M,,*79",
+        "E,6,08,1.0,20.0,M,-10.0,M,,*7E",
+    );
+    std::fs::write(&p, &dr).unwrap();
+    let d = read_nmea(&p, &NmeaOptions::default()).unwrap();
+    assert_eq!((d.fixes.len(), d.no_fix), (2, 1));
+    std::fs::write(&p, "t lat lon\n100 30 114\n").unwrap();
+    let e = read_nmea(&p, &NmeaOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("no NMEA sentence in 2 lines"), "{e}");
 }
 
 fn write_csv(name: &str, header: &str, rows: impl Fn(usize) -> String, n: usize) -> PathBuf {

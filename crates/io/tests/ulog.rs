@@ -66,7 +66,7 @@ fn sitl_log_topics_times_and_inputs() {
     assert!(count(&u, "vehicle_attitude") > 100);
     assert!(count(&u, "vehicle_global_position") > 20);
     // Inputs, on the GPS time scale.
-    let map = ulog::TimeMap::of(&u, 0);
+    let map = ulog::TimeMap::of(&u);
     println!("time map {map:?}");
     assert!(map.week.is_some_and(|w| w > 1000));
     let mut r = open_imu(&imu_src(p.clone())).unwrap();
@@ -163,7 +163,7 @@ fn hardware_log_imu_only_on_boot_time() {
     assert!(b - a > 60.0 && b - a < 75.0);
     assert!(count(&u, "vehicle_attitude") > 100);
     assert!(ulog::GPS_TOPICS.iter().all(|t| count(&u, t) == 0));
-    assert_eq!(ulog::TimeMap::of(&u, 0).week, None);
+    assert_eq!(ulog::TimeMap::of(&u).week, None);
     let mut r = open_imu(&imu_src(p.clone())).unwrap();
     let samples: Vec<_> = r.by_ref().map(|s| s.unwrap()).collect();
     assert_eq!(r.gps_week(), None);
@@ -195,11 +195,16 @@ fn synthetic_log_every_message_type() {
     assert_eq!(u.topic("sensor_baro", 1).unwrap().len(), 101);
     let att = u.topic("vehicle_attitude", 0).unwrap();
     assert!(att.has("delta.z") && att.has("q[3]") && !att.has("_padding0[0]"));
-    // GPS time: boot + 2024-03-18 00:00 UTC + 18 s = GPS week 2306, Monday.
-    let map = ulog::TimeMap::of(&u, 0);
+    // GPS time: boot + 2024-03-18 00:00 UTC + 18 s = GPS week 2306, Monday. The
+    // GPS records' time_utc_usec is their publication time here, so the log's
+    // EKF2_GPS_DELAY (110 ms) puts the IMU 0.11 s later and the fixes 0.11 s
+    // before their timestamps.
+    let map = ulog::TimeMap::of(&u);
     assert_eq!(map.week, Some(2306));
+    assert_eq!(map.gps_delay_us, 110_000);
     let t0 = map.t(ulog::synth::T0_US);
-    assert!((t0 - (86_400.0 + 18.0 + 20.0)).abs() < 1e-6, "{t0}");
+    assert!((t0 - (86_400.0 + 18.0 + 20.0 + 0.11)).abs() < 1e-6, "{t0}");
+    assert!((map.fix_t(ulog::synth::T0_US) - (86_400.0 + 18.0 + 20.0)).abs() < 1e-6);
     let dir = std::env::temp_dir().join(format!("navfuse-ulog-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let p = dir.join("synthetic.ulg");
@@ -272,7 +277,7 @@ fn sitl_log_separate_topics_agree_with_sensor_combined() {
         return;
     };
     let u = load(&p);
-    let map = ulog::TimeMap::of(&u, 0);
+    let map = ulog::TimeMap::of(&u);
     let e = ulog::separate_imu(&p, &u, 0, &map).unwrap_err().to_string();
     println!("{e}");
     assert!(e.contains("sensor_gyro") && e.contains("Hz"), "{e}");

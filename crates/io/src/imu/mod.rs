@@ -181,7 +181,7 @@ pub fn open_imu(src: &ImuSource) -> Result<ImuReader, InputError> {
         }
         ImuFormat::Ulog { multi_id } => {
             let u = crate::ulog::open(path, &mut ulog_warnings)?;
-            let map = crate::ulog::TimeMap::of(&u, 0);
+            let map = crate::ulog::TimeMap::of(&u);
             gps_week = map.week;
             let mut imu = crate::ulog::imu_rates(path, &u, *multi_id, &map)?;
             imu.samples

@@ -8,7 +8,7 @@
 //! - GNSS: `vehicle_gps_position` (else `sensor_gps`): `lat`/`lon` [1e-7 deg] and
 //!   `alt_ellipsoid` [mm] or `latitude_deg`/`longitude_deg`/`altitude_ellipsoid_m`
 //!   (newer PX4), `eph`/`epv` [m] as position sigmas, `vel_n_m_s`.. with
-//!   `s_variance_m_s` as velocity sigma (when `vel_ned_valid`), `fix_type` >= 3 kept;
+//!   `s_variance_m_s` as velocity sigma (when `vel_ned_valid`), `fix_type` 3-6 kept;
 //! - barometer: `sensor_baro.pressure` [Pa; hPa in PX4 before v1.11, told by its
 //!   range], or `vehicle_air_data.baro_pressure_pa` when that has more records;
 //! - EKF2's estimate: `vehicle_global_position` (`lat`, `lon` [deg], `alt_ellipsoid`
@@ -67,21 +67,35 @@ pub struct TimeMap {
     pub week: Option<u32>,
     /// GPS time [µs since the GPS epoch] - boot time [µs], when known.
     offset_us: Option<i128>,
+    /// The GPS records' latency [µs]: `timestamp` (publication) minus the fix's
+    /// time of validity, from the log's `EKF2_GPS_DELAY` parameter (0 without it).
+    pub gps_delay_us: i128,
 }
 
 impl TimeMap {
-    /// The mapping through the first GPS topic with `time_utc_usec` (instance
-    /// `multi_id`, else 0).
-    pub fn of(u: &Ulog, multi_id: u8) -> TimeMap {
+    /// The mapping of a log, one for all its topics: through the first GPS topic and
+    /// instance (0 first) with `time_utc_usec`. `time_utc_usec - timestamp` is the
+    /// GPS - boot offset less the GPS latency (a record is published after its fix),
+    /// so the latency `EKF2_GPS_DELAY` [ms] (what PX4's own filter assumes) is added
+    /// back: IMU and barometer samples get their true time, and a fix its time of
+    /// validity ([`TimeMap::fix_t`]).
+    pub fn of(u: &Ulog) -> TimeMap {
+        let delay_ms = u
+            .params
+            .get("EKF2_GPS_DELAY")
+            .copied()
+            .filter(|v| (0.0..=1000.0).contains(v))
+            .unwrap_or(0.0);
+        let gps_delay_us = (delay_ms * 1e3).round() as i128;
         let none = TimeMap {
             week: None,
             offset_us: None,
+            gps_delay_us,
         };
-        let Some(t) = GPS_TOPICS.iter().find_map(|n| {
-            [multi_id, 0]
-                .into_iter()
-                .find_map(|m| u.topic(n, m).filter(|t| !t.is_empty()))
-        }) else {
+        let Some(t) = GPS_TOPICS
+            .iter()
+            .find_map(|n| (0..=3u8).find_map(|m| u.topic(n, m).filter(|t| !t.is_empty())))
+        else {
             return none;
         };
         let Some(fu) = t.field("time_utc_usec") else {
@@ -99,7 +113,7 @@ impl TimeMap {
             return none;
         }
         d.sort_unstable();
-        let utc_minus_boot = d[d.len() / 2];
+        let utc_minus_boot = d[d.len() / 2] + gps_delay_us;
         // UTC µs since 1970 -> GPS µs since 1980-01-06, with the leap seconds of
         // the week of the first fix (an approximate week first).
         let epoch_us = navfuse_core::time::GPS_EPOCH_UNIX as i128 * 1_000_000;
@@ -115,7 +129,13 @@ impl TimeMap {
         TimeMap {
             week: Some(week),
             offset_us: Some(offset - week as i128 * 604_800_000_000),
+            gps_delay_us,
         }
+    }
+
+    /// Time of validity [s] of a GPS record published at boot timestamp `us`.
+    pub fn fix_t(&self, us: u64) -> f64 {
+        self.t(us) - self.gps_delay_us as f64 * 1e-6
     }
 
     /// Time [s] of boot timestamp `us`.
@@ -381,7 +401,7 @@ pub fn separate_imu(
     Ok(out)
 }
 
-/// GNSS fixes (fix_type >= 3) from the first GPS topic present, instance `multi_id`;
+/// GNSS fixes (fix_type 3-6) from the first GPS topic present, instance `multi_id`;
 /// repeated timestamps are dropped. The second value counts the records left out.
 pub fn gnss_fixes(
     path: &Path,
@@ -450,7 +470,8 @@ pub fn gnss_fixes(
             t.value(k, alt) * alt_scale,
         );
         let (sh, sv) = (t.value(k, eph), t.value(k, epv));
-        let ok = t.value(k, fix_type) >= 3.0
+        // 3D, DGPS, RTK float, RTK fixed; not 8 (extrapolated: no measurement).
+        let ok = (3.0..=6.0).contains(&t.value(k, fix_type))
             && prev.is_none_or(|p| ts > p)
             && (-90.0..=90.0).contains(&la)
             && (-360.0..=360.0).contains(&lo)
@@ -473,7 +494,8 @@ pub fn gnss_fixes(
                 let v = Vector3::new(t.value(k, n), t.value(k, e), t.value(k, d));
                 let s = t.value(k, s);
                 if v.iter().all(|x| x.is_finite()) {
-                    (Some(v), Some(Vector3::new(s, s, s)))
+                    // A 3D speed accuracy (u-blox sAcc): split over the axes.
+                    (Some(v), Some(Vector3::repeat(s / 3f64.sqrt())))
                 } else {
                     (None, None)
                 }
@@ -481,9 +503,15 @@ pub fn gnss_fixes(
             _ => (None, None),
         };
         fixes.push(GnssFix {
-            t: map.t(ts),
+            t: map.fix_t(ts),
             lla: Vector3::new(la.to_radians(), lo.to_radians(), h),
-            std_ned: Vector3::new(sh, sh, sv),
+            // eph is a horizontal (2D) accuracy (u-blox hAcc): split over N and E,
+            // as the UBX reader does.
+            std_ned: Vector3::new(
+                sh / std::f64::consts::SQRT_2,
+                sh / std::f64::consts::SQRT_2,
+                sv,
+            ),
             vel_ned,
             vel_std_ned,
         });
@@ -561,7 +589,7 @@ pub fn ekf2_track(
     path: &Path,
     u: &Ulog,
 ) -> Result<(Vec<TrajPoint>, TimeMap, Vec<String>), InputError> {
-    let map = TimeMap::of(u, 0);
+    let map = TimeMap::of(u);
     let mut warnings = Vec::new();
     let gp = topic(path, u, "vehicle_global_position", 0)?;
     let lat = need(path, &gp, "lat")?;
