@@ -33,24 +33,50 @@ pub struct GpsTime {
     pub sow: f64,
 }
 
-/// GPS - UTC \[s\] in the GPS week `week` (18 s when unknown): the leap seconds since 1999.
-pub fn leap_seconds(week: Option<u32>) -> f64 {
-    // First GPS week of each value: 1999-01-01, 2006-01-01, 2009-01-01, 2012-07-01,
-    // 2015-07-01, 2017-01-01.
-    const STEPS: [(u32, f64); 6] = [
-        (990, 13.0),
-        (1356, 14.0),
-        (1513, 15.0),
-        (1695, 16.0),
-        (1851, 17.0),
-        (1930, 18.0),
-    ];
-    let Some(w) = week else { return 18.0 };
-    STEPS
+/// The leap seconds GPS - UTC \[s\] from each UTC instant on (Unix seconds of the
+/// first second with the new value; IERS Bulletin C, 1981-07-01 .. 2017-01-01).
+const LEAP_STEPS_UNIX: [(i64, f64); 18] = [
+    (362_793_600, 1.0),    // 1981-07-01
+    (394_329_600, 2.0),    // 1982-07-01
+    (425_865_600, 3.0),    // 1983-07-01
+    (489_024_000, 4.0),    // 1985-07-01
+    (567_993_600, 5.0),    // 1988-01-01
+    (631_152_000, 6.0),    // 1990-01-01
+    (662_688_000, 7.0),    // 1991-01-01
+    (709_948_800, 8.0),    // 1992-07-01
+    (741_484_800, 9.0),    // 1993-07-01
+    (773_020_800, 10.0),   // 1994-07-01
+    (820_454_400, 11.0),   // 1996-01-01
+    (867_715_200, 12.0),   // 1997-07-01
+    (915_148_800, 13.0),   // 1999-01-01
+    (1_136_073_600, 14.0), // 2006-01-01
+    (1_230_768_000, 15.0), // 2009-01-01
+    (1_341_100_800, 16.0), // 2012-07-01
+    (1_435_708_800, 17.0), // 2015-07-01
+    (1_483_228_800, 18.0), // 2017-01-01
+];
+
+/// GPS - UTC \[s\] at a UTC instant counted in seconds since the GPS epoch
+/// (1980-01-06 00:00 UTC): exact at the leap seconds' dates.
+pub fn leap_seconds_at_utc(utc_since_gps_epoch_s: f64) -> f64 {
+    let unix = utc_since_gps_epoch_s + GPS_EPOCH_UNIX as f64;
+    LEAP_STEPS_UNIX
         .iter()
         .rev()
-        .find(|(from, _)| w >= *from)
-        .map_or(13.0, |s| s.1)
+        .find(|(from, _)| unix >= *from as f64)
+        .map_or(0.0, |s| s.1)
+}
+
+/// GPS - UTC \[s\] at the start of GPS week `week` (18 s when unknown). A week with a
+/// leap second in it changes value within the week: readers with UTC times use
+/// [`leap_seconds_at_utc`].
+pub fn leap_seconds(week: Option<u32>) -> f64 {
+    let Some(w) = week else { return 18.0 };
+    let gps_s = f64::from(w) * SECONDS_PER_WEEK;
+    // UTC = GPS - leap: the value before the start is at most 18 s off, so look up
+    // at GPS time - the value found there.
+    let first = leap_seconds_at_utc(gps_s);
+    leap_seconds_at_utc(gps_s - first)
 }
 
 /// A GPST calendar date and time of day (no leap seconds).
@@ -253,6 +279,27 @@ pub fn week_sow_to_gpst_unix(week: u32, sow: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// GPS - UTC at the leap seconds' own dates, not at week boundaries: 2009-01-01
+    /// (mid-week 1512), 2015-07-01 (mid-week 1851), 1999-01-01 (mid-week 990).
+    #[test]
+    fn leap_seconds_change_on_their_dates() {
+        let utc = |y: i64, m: u32, d: u32, h: f64| {
+            (days_from_civil(y, m, d) - GPS_EPOCH_DAYS_FROM_1970) as f64 * 86_400.0 + h * 3600.0
+        };
+        assert_eq!(leap_seconds_at_utc(utc(2008, 12, 31, 23.99)), 14.0);
+        assert_eq!(leap_seconds_at_utc(utc(2009, 1, 2, 0.0)), 15.0);
+        assert_eq!(leap_seconds_at_utc(utc(2015, 6, 29, 12.0)), 16.0);
+        assert_eq!(leap_seconds_at_utc(utc(2015, 7, 1, 0.0)), 17.0);
+        assert_eq!(leap_seconds_at_utc(utc(1998, 12, 28, 0.0)), 12.0);
+        assert_eq!(leap_seconds_at_utc(utc(1980, 1, 6, 0.0)), 0.0);
+        assert_eq!(leap_seconds_at_utc(utc(2024, 3, 18, 0.0)), 18.0);
+        // By week: the value at the week's start.
+        assert_eq!(leap_seconds(Some(1512)), 14.0);
+        assert_eq!(leap_seconds(Some(1513)), 15.0);
+        assert_eq!(leap_seconds(Some(2374)), 18.0);
+        assert_eq!(leap_seconds(None), 18.0);
+    }
 
     fn cal(year: i32, month: u32, day: u32, hour: u32, minute: u32, second: f64) -> GpstCalendar {
         GpstCalendar {

@@ -62,6 +62,17 @@ pub fn read_baro(
         let u = crate::ulog::open(path, warnings)?;
         let map = crate::ulog::TimeMap::of(&u);
         let p = crate::ulog::baro_pressures(path, &u, multi_id, &map)?;
+        let outside = p
+            .iter()
+            .filter(|&&(_, p)| !(10_000.0..=120_000.0).contains(&p))
+            .count();
+        if outside > 0 {
+            warnings.push(format!(
+                "{}: {outside} of {} barometer pressures outside 10-120 kPa dropped",
+                path.display(),
+                p.len()
+            ));
+        }
         return Ok(p
             .into_iter()
             .filter(|&(_, p)| (10_000.0..=120_000.0).contains(&p))

@@ -259,8 +259,7 @@ fn parse_iso(s: &[u8]) -> Option<f64> {
 
 /// Leap seconds (GPS - UTC) at a UTC time counted in seconds since the GPS epoch.
 fn leap_at(utc_since_gps_epoch: f64) -> f64 {
-    let w = (utc_since_gps_epoch / SECONDS_PER_WEEK).floor();
-    navfuse_core::time::leap_seconds(Some(w.clamp(0.0, 1e6) as u32))
+    navfuse_core::time::leap_seconds_at_utc(utc_since_gps_epoch)
 }
 
 /// Read a CSV GNSS file: fixes with `t` in GPS seconds of the returned week (None
@@ -345,6 +344,15 @@ pub fn read_csv_gnss(
                         if !(0.0..=100_000.0).contains(&w) || w.fract() != 0.0 {
                             return Err(row
                                 .err(wc, "week", format!("expected a GPS week number, found {w}"))
+                                .into());
+                        }
+                        if !(0.0..SECONDS_PER_WEEK + 1.0).contains(&sow) {
+                            return Err(row
+                                .err(
+                                    tk,
+                                    "time",
+                                    format!("expected GPS seconds of week in [0, 604801) beside week_col, found {sow} (check time_unit)"),
+                                )
                                 .into());
                         }
                         (w * SECONDS_PER_WEEK + sow, true)

@@ -218,7 +218,7 @@ pub fn read_nmea(path: &Path, opt: &NmeaOptions) -> Result<NmeaData, InputError>
                 "expected a date after the GPS epoch 1980-01-06",
             ));
         }
-        let leap = navfuse_core::time::leap_seconds(Some(week_utc as u32));
+        let leap = navfuse_core::time::leap_seconds_at_utc(utc_s);
         let gps_s = utc_s + leap;
         let w0 = *week0.get_or_insert((gps_s / SECONDS_PER_WEEK).floor() as i64);
         let t = gps_s - w0 as f64 * SECONDS_PER_WEEK;
@@ -734,10 +734,9 @@ mod tests {
             "altitude + geoid separation"
         );
         assert_eq!(f.std_ned, Vector3::new(1.5, 1.2, 3.1));
-        // 1994-03-23 is a Wednesday of GPS week 741; GPS-UTC was 9 s then, but the
-        // leap table starts in 1999 (13 s before): documented.
+        // 1994-03-23 is a Wednesday of GPS week 741; GPS-UTC was 9 s then.
         assert_eq!(d.gps_week, Some(741));
-        let sow = 3.0 * 86400.0 + 12.0 * 3600.0 + 35.0 * 60.0 + 19.0 + 13.0;
+        let sow = 3.0 * 86400.0 + 12.0 * 3600.0 + 35.0 * 60.0 + 19.0 + 9.0;
         assert!((f.t - sow).abs() < 1e-9, "{}", f.t);
         let v = f.vel_ned.unwrap();
         let mps = 22.4 * 1852.0 / 3600.0;

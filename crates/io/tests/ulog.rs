@@ -449,3 +449,57 @@ fn huge_timestamps_do_not_wrap() {
         }
     }
 }
+
+fn ulog_msg(out: &mut Vec<u8>, ty: u8, payload: &[u8]) {
+    out.extend_from_slice(&(payload.len() as u16).to_le_bytes());
+    out.push(ty);
+    out.extend_from_slice(payload);
+}
+
+fn ulog_header() -> Vec<u8> {
+    let mut out = ulog::MAGIC.to_vec();
+    out.push(1);
+    out.extend_from_slice(&0u64.to_le_bytes());
+    out
+}
+
+/// An empty type in big nested arrays (no bytes, so no size guard) is refused at
+/// once instead of looping 65535^depth times.
+#[test]
+fn empty_nested_type_is_refused_not_looped() {
+    let mut b = ulog_header();
+    ulog_msg(&mut b, b'F', b"z:");
+    ulog_msg(&mut b, b'F', b"y:z[65535] a;");
+    ulog_msg(&mut b, b'F', b"t:uint64_t timestamp;y[65535] a;");
+    ulog_msg(&mut b, b'A', b"\x00\x00\x00t");
+    let start = std::time::Instant::now();
+    let e = Ulog::parse(b).unwrap_err().to_string();
+    assert!(e.contains("has no bytes"), "{e}");
+    assert!(start.elapsed().as_secs_f64() < 1.0);
+}
+
+/// A msg_id added again for another topic: the first topic keeps its records.
+#[test]
+fn reused_msg_id_keeps_the_earlier_records() {
+    let mut b = ulog_header();
+    ulog_msg(&mut b, b'F', b"a:uint64_t timestamp;float x;");
+    ulog_msg(&mut b, b'F', b"b:uint64_t timestamp;float y;");
+    ulog_msg(&mut b, b'A', b"\x00\x05\x00a");
+    let rec = |ts: u64, v: f32| {
+        [
+            5u16.to_le_bytes().as_slice(),
+            &ts.to_le_bytes(),
+            &v.to_le_bytes(),
+        ]
+        .concat()
+    };
+    ulog_msg(&mut b, b'D', &rec(10, 1.0));
+    ulog_msg(&mut b, b'D', &rec(20, 2.0));
+    ulog_msg(&mut b, b'A', b"\x00\x05\x00b");
+    ulog_msg(&mut b, b'D', &rec(30, 3.0));
+    let u = Ulog::parse(b).unwrap();
+    assert_eq!(u.topic("a", 0).unwrap().len(), 2);
+    let t = u.topic("b", 0).unwrap();
+    assert_eq!(t.len(), 1);
+    assert_eq!(t.value(0, t.field("y").unwrap()), 3.0);
+}

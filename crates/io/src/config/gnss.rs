@@ -234,11 +234,7 @@ pub(super) fn convert(
             ));
         }
     }
-    if g.quality.is_some()
-        && matches!(
-            g.format,
-            TGnssFormat::Nmea | TGnssFormat::Csv | TGnssFormat::Ulog
-        )
+    if g.quality.is_some() && g.format != TGnssFormat::RtklibPos && g.format != TGnssFormat::KfGins
     {
         return Err(kerr(
             "gnss.quality",

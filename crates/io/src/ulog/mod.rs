@@ -31,7 +31,7 @@ use crate::input::RateSampling;
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use navfuse_core::attitude::euler_from_q_bn;
 use navfuse_core::eval::TrajPoint;
-use navfuse_core::time::{leap_seconds, SECONDS_PER_WEEK};
+use navfuse_core::time::{leap_seconds_at_utc, SECONDS_PER_WEEK};
 use navfuse_core::GnssFix;
 use std::path::Path;
 
@@ -117,8 +117,9 @@ impl TimeMap {
         // UTC µs since 1970 -> GPS µs since 1980-01-06, with the leap seconds of
         // the week of the first fix (an approximate week first).
         let epoch_us = navfuse_core::time::GPS_EPOCH_UNIX as i128 * 1_000_000;
-        let approx = (utc_minus_boot - epoch_us) as f64 * 1e-6 / SECONDS_PER_WEEK;
-        let leap = leap_seconds(Some(approx.clamp(0.0, 1e6) as u32));
+        let first_utc_s =
+            (utc_minus_boot - epoch_us + t.timestamp_us(0).unwrap_or(0) as i128) as f64 * 1e-6;
+        let leap = leap_seconds_at_utc(first_utc_s);
         let offset = utc_minus_boot - epoch_us + (leap * 1e6) as i128;
         let first = t.timestamp_us(0).unwrap_or(0) as i128 + offset;
         let week = (first.max(0) as f64 * 1e-6 / SECONDS_PER_WEEK).floor();
@@ -533,9 +534,16 @@ pub fn baro_pressures(
     let (t, field, scale) = match u.topic("sensor_baro", multi_id).filter(|t| t.len() >= air) {
         Some(t) => {
             let f = need(path, &t, "pressure")?.clone();
-            // PX4 before v1.11 logged hPa (mbar); since then Pa.
-            let first = (!t.is_empty()).then(|| t.value(0, &f)).unwrap_or(0.0);
-            let scale = if first > 0.0 && first < 2000.0 {
+            // PX4 before v1.11 logged hPa (mbar); since then Pa. Told by the median
+            // of the finite positive values (a first 0 while the sensor starts
+            // does not decide it).
+            let mut v: Vec<f64> = (0..t.len())
+                .map(|k| t.value(k, &f))
+                .filter(|x| x.is_finite() && *x > 0.0)
+                .collect();
+            v.sort_by(f64::total_cmp);
+            let median = v.get(v.len() / 2).copied().unwrap_or(0.0);
+            let scale = if median > 0.0 && median < 2000.0 {
                 100.0
             } else {
                 1.0

@@ -146,6 +146,8 @@ pub struct Ulog {
     layouts: HashMap<String, (Vec<Field>, usize)>,
     /// Subscriptions by msg_id.
     pub subscriptions: HashMap<u16, Subscription>,
+    /// Subscriptions whose msg_id a later `A` message took over, with their records.
+    pub retired: Vec<Subscription>,
     /// `I` info strings (char arrays) and other info values as text.
     pub info: HashMap<String, String>,
     /// `P` parameters (last value).
@@ -367,7 +369,7 @@ impl Ulog {
                         );
                     }
                     u.layout(&name, pos)?;
-                    u.subscriptions.insert(
+                    let old = u.subscriptions.insert(
                         msg_id,
                         Subscription {
                             name,
@@ -375,6 +377,8 @@ impl Ulog {
                             records: Vec::new(),
                         },
                     );
+                    // A msg_id used again: the earlier topic keeps its records.
+                    u.retired.extend(old.filter(|o| !o.records.is_empty()));
                 }
                 b'R' => {}
                 b'D' => {
@@ -485,7 +489,19 @@ impl Ulog {
                     }
                     None => {
                         let p = format!("{fname}.");
+                        let before = off;
                         off = self.flatten(&f.type_name, &p, off, out, depth + 1, at)?;
+                        // Each element must take bytes, so the size guard below
+                        // bounds the work (an empty type in an array would not).
+                        if off == before {
+                            return err(
+                                at,
+                                format!(
+                                    "format {name}: field {} of type {} has no bytes",
+                                    f.name, f.type_name
+                                ),
+                            );
+                        }
                     }
                 }
                 if off > 1 << 20 {
@@ -501,6 +517,7 @@ impl Ulog {
         let mut subs: Vec<&Subscription> = self
             .subscriptions
             .values()
+            .chain(&self.retired)
             .filter(|s| s.name == name && s.multi_id == multi_id)
             .collect();
         if subs.is_empty() {
@@ -523,6 +540,7 @@ impl Ulog {
         let mut v: Vec<_> = self
             .subscriptions
             .values()
+            .chain(&self.retired)
             .map(|s| (s.name.clone(), s.multi_id, s.records.len()))
             .collect();
         v.sort();
