@@ -6,10 +6,10 @@
 
 mod shared_data;
 
-use navfuse_gnss::{GpsEphemeris, System};
-use navfuse_io::rinex_nav::read_rinex_nav;
+use navfuse_gnss::{BeiDouEphemeris, GpsEphemeris, System};
+use navfuse_io::rinex_nav::{read_rinex_nav, RinexNav};
 use navfuse_io::rinex_obs::read_rinex_obs_all;
-use navfuse_io::ubx::{decode_ubx, read_ubx};
+use navfuse_io::ubx::{decode_ubx, read_ubx, UbxLog};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
@@ -167,21 +167,29 @@ fn compare(u: &GpsEphemeris, r: &GpsEphemeris) -> Vec<String> {
             ),
         ]
     };
-    f(u).into_iter()
-        .zip(f(r))
+    differing(&format!("G{:02}", u.prn), f(u), f(r))
+}
+
+/// The fields of `u` that differ from `r`'s beyond D19.12, named with `sat`.
+fn differing(sat: &str, u: Vec<(&str, f64)>, r: Vec<(&str, f64)>) -> Vec<String> {
+    u.into_iter()
+        .zip(r)
         .filter(|((_, a), (_, b))| !same(*a, *b))
-        .map(|((n, a), (_, b))| format!("G{:02} {n}: ubx {a:e} rinex {b:e}", u.prn))
+        .map(|((n, a), (_, b))| format!("{sat} {n}: ubx {a:e} rinex {b:e}"))
         .collect()
+}
+
+/// The walk log decoded and convbin's navigation file of it, or None (skipped).
+fn log_and_convbin_nav() -> Option<(UbxLog, RinexNav)> {
+    let (ubx, nav) = (data("gnss_1730.ubx")?, data("derived_rinex/gnss_1730.nav")?);
+    Some((read_ubx(&ubx).unwrap(), read_rinex_nav(&nav).unwrap()))
 }
 
 #[test]
 fn sfrbx_equals_convbin_nav() {
-    let (Some(ubx), Some(nav)) = (data("gnss_1730.ubx"), data("derived_rinex/gnss_1730.nav"))
-    else {
+    let Some((log, rinex)) = log_and_convbin_nav() else {
         return;
     };
-    let log = read_ubx(&ubx).unwrap();
-    let rinex = read_rinex_nav(&nav).unwrap();
     let mut bad = Vec::new();
     for r in &rinex.gps {
         match log
@@ -207,6 +215,94 @@ fn sfrbx_equals_convbin_nav() {
     assert!(!rinex.gps.is_empty());
     assert!(bad.is_empty());
     assert_eq!(log.nav.gps.len(), rinex.gps.len());
+}
+
+/// The RINEX fields of a BeiDou record (RINEX 3.05 Table A14), as (name, value).
+fn bds_fields(e: &BeiDouEphemeris) -> Vec<(&'static str, f64)> {
+    let o = &e.orbit;
+    let t = |t: navfuse_gnss::GpsTime| f64::from(t.week) * 604800.0 + t.sow;
+    vec![
+        ("toc", t(e.toc)),
+        ("af0", e.af0_s),
+        ("af1", e.af1_s_per_s),
+        ("af2", e.af2_s_per_s2),
+        ("aode", f64::from(e.aode)),
+        ("crs", o.crs_m),
+        ("delta_n", o.delta_n_rad_per_s),
+        ("m0", o.m0_rad),
+        ("cuc", o.cuc_rad),
+        ("e", o.e),
+        ("cus", o.cus_rad),
+        ("sqrt_a", o.sqrt_a_sqrt_m),
+        ("toe_sow", o.toe_sow_s),
+        ("cic", o.cic_rad),
+        ("omega0", o.omega0_rad),
+        ("cis", o.cis_rad),
+        ("i0", o.i0_rad),
+        ("crc", o.crc_m),
+        ("omega", o.omega_rad),
+        ("omega_dot", o.omega_dot_rad_per_s),
+        ("idot", o.idot_rad_per_s),
+        ("toe", t(e.toe)),
+        ("ura", e.sv_accuracy_m),
+        ("sat_h1", f64::from(e.sat_h1)),
+        ("tgd1", e.tgd1_s),
+        ("tgd2", e.tgd2_s),
+        ("ttr", e.transmission_time.map_or(f64::NAN, t)),
+        ("aodc", f64::from(e.aodc)),
+    ]
+}
+
+/// Every BeiDou D1/D2 record convbin wrote is decoded from RXM-SFRBX with every
+/// field equal to D19.12, and no other is decoded.
+#[test]
+fn sfrbx_beidou_equals_convbin_nav() {
+    let Some((log, rinex)) = log_and_convbin_nav() else {
+        return;
+    };
+    let mut bad = Vec::new();
+    for r in &rinex.beidou {
+        match log
+            .nav
+            .beidou
+            .iter()
+            .find(|u| u.prn == r.prn && u.toe == r.toe)
+        {
+            Some(u) => bad.extend(differing(
+                &format!("C{:02}", u.prn),
+                bds_fields(u),
+                bds_fields(r),
+            )),
+            None => bad.push(format!("C{:02} toe {:?}: not decoded", r.prn, r.toe)),
+        }
+    }
+    for u in &log.nav.beidou {
+        if !rinex
+            .beidou
+            .iter()
+            .any(|r| r.prn == u.prn && r.toe == u.toe)
+        {
+            bad.push(format!(
+                "C{:02} toe {:?}: decoded, not in the RINEX file",
+                u.prn, u.toe
+            ));
+        }
+    }
+    let prns: Vec<u8> = log.nav.beidou.iter().map(|e| e.prn).collect();
+    eprintln!(
+        "SFRBX: {} BeiDou ephemerides decoded ({prns:?}), RINEX nav {}, BeiDou pages {:?}, mismatches {}",
+        log.nav.beidou.len(),
+        rinex.beidou.len(),
+        log.sfrbx.beidou,
+        bad.len()
+    );
+    for b in &bad {
+        eprintln!("  {b}");
+    }
+    assert_eq!(rinex.beidou.len(), 8);
+    assert!(bad.is_empty());
+    assert_eq!(log.nav.beidou.len(), rinex.beidou.len());
+    assert_eq!(log.sfrbx.beidou.rejected, 0);
 }
 
 #[test]
