@@ -6,8 +6,8 @@
 //! 40, SAR 22, spare 2, CRC 24, ... The CRC-24Q covers even bits 0-113 and odd bits
 //! 0-81 (196 bits). The 128-bit data word is even bits 2-113 and odd bits 2-17.
 //!
-//! Word types 1-4 with one IODnav and a word type 5 make an ephemeris; the
-//! transmission time is word 5's WN/TOW (GST, the week + 1024 as RINEX counts
+//! Word types 1-4 with one IODnav and a word type 5 make an ephemeris (tried at
+//! each page of types 1-5); the transmission time is the set's word 5 WN/TOW (GST, the week + 1024 as RINEX counts
 //! GAL weeks). Data sources (RINEX 3.05 Table A8): I/NAV E1-B 0x201, E5b-I 0x204.
 
 use super::{near, p2, Bits, SfrbxCounts};
