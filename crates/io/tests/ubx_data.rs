@@ -219,14 +219,32 @@ fn sfrbx_equals_convbin_nav() {
 
 /// The RINEX fields of a BeiDou record (RINEX 3.05 Table A14), as (name, value).
 fn bds_fields(e: &BeiDouEphemeris) -> Vec<(&'static str, f64)> {
-    let o = &e.orbit;
-    let t = |t: navfuse_gnss::GpsTime| f64::from(t.week) * 604800.0 + t.sow;
-    vec![
-        ("toc", t(e.toc)),
+    let mut v = vec![
+        ("toc", secs(e.toc)),
         ("af0", e.af0_s),
         ("af1", e.af1_s_per_s),
         ("af2", e.af2_s_per_s2),
         ("aode", f64::from(e.aode)),
+        ("toe", secs(e.toe)),
+        ("ura", e.sv_accuracy_m),
+        ("sat_h1", f64::from(e.sat_h1)),
+        ("tgd1", e.tgd1_s),
+        ("tgd2", e.tgd2_s),
+        ("ttr", e.transmission_time.map_or(f64::NAN, secs)),
+        ("aodc", f64::from(e.aodc)),
+    ];
+    v.extend(kepler_fields(&e.orbit));
+    v
+}
+
+/// Seconds since the GPS epoch (any week count).
+fn secs(t: navfuse_gnss::GpsTime) -> f64 {
+    f64::from(t.week) * 604800.0 + t.sow
+}
+
+/// The Keplerian fields 1-16 of the common RINEX layout.
+fn kepler_fields(o: &navfuse_gnss::ephemeris::kepler::KeplerOrbit) -> Vec<(&'static str, f64)> {
+    vec![
         ("crs", o.crs_m),
         ("delta_n", o.delta_n_rad_per_s),
         ("m0", o.m0_rad),
@@ -243,13 +261,6 @@ fn bds_fields(e: &BeiDouEphemeris) -> Vec<(&'static str, f64)> {
         ("omega", o.omega_rad),
         ("omega_dot", o.omega_dot_rad_per_s),
         ("idot", o.idot_rad_per_s),
-        ("toe", t(e.toe)),
-        ("ura", e.sv_accuracy_m),
-        ("sat_h1", f64::from(e.sat_h1)),
-        ("tgd1", e.tgd1_s),
-        ("tgd2", e.tgd2_s),
-        ("ttr", e.transmission_time.map_or(f64::NAN, t)),
-        ("aodc", f64::from(e.aodc)),
     ]
 }
 
@@ -307,38 +318,22 @@ fn sfrbx_beidou_equals_convbin_nav() {
 
 /// The RINEX fields of a Galileo record (RINEX 3.05 Table A8), as (name, value).
 fn gal_fields(e: &GalileoEphemeris) -> Vec<(&'static str, f64)> {
-    let o = &e.orbit;
-    let t = |t: navfuse_gnss::GpsTime| f64::from(t.week) * 604800.0 + t.sow;
-    vec![
-        ("toc", t(e.toc)),
+    let mut v = vec![
+        ("toc", secs(e.toc)),
         ("af0", e.af0_s),
         ("af1", e.af1_s_per_s),
         ("af2", e.af2_s_per_s2),
         ("iodnav", f64::from(e.iodnav)),
-        ("crs", o.crs_m),
-        ("delta_n", o.delta_n_rad_per_s),
-        ("m0", o.m0_rad),
-        ("cuc", o.cuc_rad),
-        ("e", o.e),
-        ("cus", o.cus_rad),
-        ("sqrt_a", o.sqrt_a_sqrt_m),
-        ("toe_sow", o.toe_sow_s),
-        ("cic", o.cic_rad),
-        ("omega0", o.omega0_rad),
-        ("cis", o.cis_rad),
-        ("i0", o.i0_rad),
-        ("crc", o.crc_m),
-        ("omega", o.omega_rad),
-        ("omega_dot", o.omega_dot_rad_per_s),
-        ("idot", o.idot_rad_per_s),
         ("data_sources", f64::from(e.data_sources)),
-        ("toe", t(e.toe)),
+        ("toe", secs(e.toe)),
         ("sisa", e.sisa_m),
         ("health", f64::from(e.health)),
         ("bgd_e5a", e.bgd_e1_e5a_s),
         ("bgd_e5b", e.bgd_e1_e5b_s),
-        ("ttr", e.transmission_time.map_or(f64::NAN, t)),
-    ]
+        ("ttr", e.transmission_time.map_or(f64::NAN, secs)),
+    ];
+    v.extend(kepler_fields(&e.orbit));
+    v
 }
 
 /// The Galileo I/NAV records against convbin's of the same pages
