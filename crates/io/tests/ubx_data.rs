@@ -487,6 +487,22 @@ fn seed_cut_decodes() {
     assert!(log.scan.skipped_bytes > 50);
 }
 
+/// The second fuzz seed (tests/data/fuzz/walk_0827_sfrbx.ubx): one BeiDou D1 and
+/// one Galileo I/NAV set from the walk log.
+#[test]
+fn sfrbx_seed_decodes() {
+    let d = std::fs::read(
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz/walk_0827_sfrbx.ubx"),
+    )
+    .unwrap();
+    let log = decode_ubx(&d, "seed2");
+    assert_eq!(log.nav.beidou.len(), 1);
+    assert_eq!(log.nav.beidou[0].prn, 21);
+    assert_eq!(log.nav.galileo.len(), 1);
+    assert_eq!(log.nav.galileo[0].prn, 7);
+    assert!(log.warnings.is_empty(), "{:?}", log.warnings);
+}
+
 /// Garbage, a checksum error and a truncated last frame: counted and warned with
 /// byte offsets; the intact frames are read.
 #[test]
