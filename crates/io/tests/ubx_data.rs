@@ -215,6 +215,14 @@ fn sfrbx_equals_convbin_nav() {
     assert!(!rinex.gps.is_empty());
     assert!(bad.is_empty());
     assert_eq!(log.nav.gps.len(), rinex.gps.len());
+    // The ionosphere and leap seconds of page 18 as convbin's header has them: the
+    // log holds no page 18 (subframe 4 SV IDs 60-63 only), so neither has any.
+    assert_eq!(log.nav.iono_alpha, rinex.iono_alpha);
+    assert_eq!(log.nav.iono_beta, rinex.iono_beta);
+    assert_eq!(log.nav.iono_alpha, None);
+    if let Some(l) = rinex.leap_seconds {
+        assert_eq!(log.nav.leap_seconds, Some(l));
+    }
 }
 
 /// The RINEX fields of a BeiDou record (RINEX 3.05 Table A14), as (name, value).

@@ -302,7 +302,7 @@ impl SfrbxDecoder {
                     }
                 }),
             // GLONASS L1 OF (0) / L2 OF (2): one string in 4 words.
-            (6, 0 | 2) if n >= 4 && (1..=24).contains(&sv_id) => {
+            (6, 0 | 2) if n >= 4 && (1..=32).contains(&sv_id) => {
                 self.glonass
                     .decode(sv_id, i32::from(freq_id) - 7, &words[..4], rx, c)
             }
