@@ -10,6 +10,8 @@
 use navfuse_io::ubx::decode_ubx;
 use navfuse_io::ubx::frame::checksum;
 
+/// The ICDs' pi (truncated on purpose).
+#[allow(clippy::approx_constant)]
 const SC: f64 = 3.141_592_653_589_8;
 
 /// A bit string written at positions.
@@ -203,7 +205,8 @@ fn beidou_d2_geo_round_trip() {
     let s1 = 406_800 + 60;
     let sp = |page: i64| s1 + if page == 1 { 0 } else { 6 + 3 * (page - 3) };
     let mut d = Vec::new();
-    let pages: Vec<(i64, Vec<(usize, usize, i64)>)> = vec![
+    type Fields = Vec<(usize, usize, i64)>;
+    let pages: Vec<(i64, Fields)> = vec![
         (
             1,
             vec![

@@ -261,7 +261,7 @@ impl SfrbxDecoder {
             ..rx
         };
         let c = &mut self.counts;
-        let out = match (gnss_id, sig_id) {
+        match (gnss_id, sig_id) {
             // GPS L1 C/A LNAV (ten 30-bit words).
             (0, 0) if n == 10 && (1..=32).contains(&sv_id) => self
                 .gps
@@ -310,8 +310,7 @@ impl SfrbxDecoder {
                 c.not_decoded += 1;
                 Ok(())
             }
-        };
-        out
+        }
     }
 
     /// The decoded ephemerides: GPS, QZSS, Galileo, BeiDou, GLONASS.
@@ -354,7 +353,7 @@ mod tests {
         assert_eq!(b.sm(0, 8), 0);
         assert_eq!(b.sm(32, 4), -7);
         assert_eq!(b.u2(30, 2, 32, 2), 0b0111);
-        assert_eq!(b.u(60, 10), 0b1111_0000_00);
+        assert_eq!(b.u(60, 10), 0b11_1100_0000);
         assert_eq!(b.s2(0, 1, 1, 3), -8);
     }
 }
