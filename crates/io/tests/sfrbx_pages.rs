@@ -676,4 +676,13 @@ fn glonass_strings_round_trip() {
     chk[2] ^= 1 << (31 - (83 - 64)); // ICD bit 2 (beta_2) sits at position 83
     let log = decode_ubx(&[rawx(week, tow), sfrbx(6, 7, 0, 10, &chk)].concat(), "chk");
     assert_eq!(log.sfrbx.glonass_hamming_failures, 0);
+    // Strings 1-3, then string 4 a minute later (same frame number in word 3): not
+    // one frame, no ephemeris.
+    let mut d = rawx(week, tow);
+    for s in &strings[..3] {
+        d.extend(sfrbx(6, 7, 0, 10, s));
+    }
+    d.extend(rawx(week, tow + 60.0));
+    d.extend(sfrbx(6, 7, 0, 10, &strings[3]));
+    assert!(decode_ubx(&d, "late").nav.glonass.is_empty());
 }

@@ -61,8 +61,9 @@ pub(crate) fn string_bits(words: &[u32]) -> Bits {
 
 #[derive(Default)]
 pub(super) struct GloDecoder {
-    /// Strings 1-4 per slot with the frame number they were received in.
-    strings: HashMap<u8, ([Option<Bits>; 4], u32)>,
+    /// Strings 1-4 per slot (each with the receiver time it came at) and the frame
+    /// number they were received in.
+    strings: HashMap<u8, ([Option<(Bits, f64)>; 4], u32)>,
     pub(super) ephemerides: Vec<GlonassEphemeris>,
 }
 
@@ -97,8 +98,16 @@ impl GloDecoder {
         if entry.1 != frame {
             *entry = (Default::default(), frame);
         }
-        entry.0[m - 1] = Some(s);
-        if let [Some(s1), Some(s2), Some(s3), Some(s4)] = &entry.0 {
+        let t_s = secs(t_rx);
+        entry.0[m - 1] = Some((s, t_s));
+        // One frame (30 s) whatever word 3 says: strings 1-4 are sent within 8 s.
+        if let [Some((s1, t1)), Some((s2, t2)), Some((s3, t3)), Some((s4, t4))] = &entry.0 {
+            let ts = [*t1, *t2, *t3, *t4];
+            let span = ts.iter().cloned().fold(f64::MIN, f64::max)
+                - ts.iter().cloned().fold(f64::MAX, f64::min);
+            if span > 30.0 {
+                return Ok(());
+            }
             let leap = rx.leap_seconds.map_or_else(
                 || navfuse_gnss::time::leap_seconds(u32::try_from(t_rx.week).ok()),
                 f64::from,
