@@ -1,7 +1,7 @@
 //! u-blox UBX binary logs (docs/FORMATS.md "u-blox UBX"): RXM-RAWX raw
-//! measurements as [`MultiObsEpoch`]s, RXM-SFRBX GPS LNAV subframes as
-//! [`GpsEphemeris`] records (in a [`RinexNav`], so the GNSS layer takes them as it
-//! takes a RINEX navigation file), NAV-PVT as receiver fixes. Other messages are
+//! measurements as [`MultiObsEpoch`]s, RXM-SFRBX navigation pages as ephemerides
+//! of GPS, QZSS, Galileo, BeiDou and GLONASS (in a [`RinexNav`], so the GNSS layer
+//! takes them as it takes a RINEX navigation file), NAV-PVT as receiver fixes. Other messages are
 //! skipped and counted. Damage (bytes outside frames, checksum errors, malformed
 //! messages, a truncated last frame) never stops the read: it is counted and
 //! reported as warnings with byte offsets.
