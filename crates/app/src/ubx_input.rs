@@ -39,24 +39,37 @@ pub fn load_ubx(src: &GnssSource, r: &RinexGnss, systems: &[System]) -> Result<R
     Ok(out)
 }
 
-/// Add the records of `more` to `nav`: GPS records already decoded (same PRN, IODE
-/// and toe) are not repeated; the ionosphere and leap seconds fill what is missing.
+/// Add the records of `more` to `nav`: records already decoded (GPS/QZSS: same PRN,
+/// IODE and toe; Galileo: PRN, IODnav, toe; BeiDou: PRN, toe, AODE; GLONASS: slot,
+/// tb) are not repeated; the ionosphere and leap seconds fill what is missing.
 fn merge_nav(nav: &mut RinexNav, more: RinexNav) {
-    for e in more.gps {
-        if !nav
-            .gps
-            .iter()
-            .any(|g| g.prn == e.prn && g.iode == e.iode && g.toe == e.toe)
-        {
-            nav.gps.push(e);
+    fn add<T>(to: &mut Vec<T>, from: Vec<T>, same: impl Fn(&T, &T) -> bool) {
+        for e in from {
+            if !to.iter().any(|x| same(x, &e)) {
+                to.push(e);
+            }
         }
     }
-    nav.qzss.extend(more.qzss);
-    nav.galileo.extend(more.galileo);
-    nav.beidou.extend(more.beidou);
-    nav.glonass.extend(more.glonass);
+    let lnav = |a: &navfuse_gnss::GpsEphemeris, b: &navfuse_gnss::GpsEphemeris| {
+        a.prn == b.prn && a.iode == b.iode && a.toe == b.toe
+    };
+    add(&mut nav.gps, more.gps, lnav);
+    add(&mut nav.qzss, more.qzss, lnav);
+    add(&mut nav.galileo, more.galileo, |a, b| {
+        a.prn == b.prn && a.iodnav == b.iodnav && a.toe == b.toe
+    });
+    add(&mut nav.beidou, more.beidou, |a, b| {
+        a.prn == b.prn && a.toe == b.toe && a.aode == b.aode
+    });
+    add(&mut nav.glonass, more.glonass, |a, b| {
+        a.slot == b.slot && a.tb == b.tb
+    });
     nav.iono_alpha = nav.iono_alpha.or(more.iono_alpha);
     nav.iono_beta = nav.iono_beta.or(more.iono_beta);
+    let (io, mo) = (&mut nav.iono, more.iono);
+    io.qzss_klobuchar = io.qzss_klobuchar.or(mo.qzss_klobuchar);
+    io.beidou_klobuchar = io.beidou_klobuchar.or(mo.beidou_klobuchar);
+    io.galileo_nequick = io.galileo_nequick.or(mo.galileo_nequick);
     nav.leap_seconds = nav.leap_seconds.or(more.leap_seconds);
     nav.warnings.extend(more.warnings);
 }

@@ -213,7 +213,7 @@ pub enum GnssFormat {
 /// How a UBX log is used (`gnss.ubx_source`).
 #[derive(Clone, Debug, PartialEq)]
 pub enum UbxGnss {
-    /// RXM-RAWX observations with the RXM-SFRBX GPS ephemerides, through the GNSS
+    /// RXM-RAWX observations with the RXM-SFRBX ephemerides of every system, through the GNSS
     /// layer as RINEX observations are, with the same settings. The settings'
     /// `nav_path` is an extra RINEX navigation file whose records are added to the
     /// decoded ones; empty (`PathBuf::new()`) for none ([`UbxGnss::extra_nav`]).

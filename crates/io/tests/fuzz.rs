@@ -492,11 +492,26 @@ fn ubx(p: &Path) -> Result<(), String> {
             }
         }
     }
-    for e in &log.nav.gps {
-        let s = e.sat_state(e.toe);
+    // Every decoded record of every system gives a finite satellite state.
+    let mut states = Vec::new();
+    for e in log.nav.gps.iter().chain(&log.nav.qzss) {
+        states.push((format!("G/J{:02}", e.prn), e.sat_state(e.toe)));
+    }
+    for e in &log.nav.galileo {
+        states.push((format!("E{:02}", e.prn), e.sat_state(e.toe)));
+    }
+    for e in &log.nav.beidou {
+        let t = navfuse_gnss::ephemeris::beidou::bdt_to_gpst(e.toe);
+        states.push((format!("C{:02}", e.prn), e.sat_state(t)));
+    }
+    for e in &log.nav.glonass {
+        states.push((format!("R{:02}", e.slot), e.sat_state(e.tb.add_s(300.0))));
+    }
+    for (sat, s) in &states {
         for v in s.pos_ecef_m.iter().chain(s.vel_ecef_mps.iter()) {
-            finite(&format!("satellite state of G{:02}", e.prn), *v)?;
+            finite(&format!("satellite state of {sat}"), *v)?;
         }
+        finite(&format!("clock of {sat}"), s.clock_bias_s)?;
     }
     let mut prev = None;
     for f in &log.fixes {
@@ -608,7 +623,15 @@ fn targets() -> Vec<Target> {
             config,
         ),
         t("config_yaml", "yaml", &[&format!("{f}kfgins.yaml")], config),
-        t("ubx", "ubx", &[&format!("{f}walk_0827_cut.ubx")], ubx),
+        t(
+            "ubx",
+            "ubx",
+            &[
+                &format!("{f}walk_0827_cut.ubx"),
+                &format!("{f}walk_0827_sfrbx.ubx"),
+            ],
+            ubx,
+        ),
     ]
 }
 

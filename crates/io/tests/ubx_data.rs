@@ -6,10 +6,10 @@
 
 mod shared_data;
 
-use navfuse_gnss::{GpsEphemeris, System};
-use navfuse_io::rinex_nav::read_rinex_nav;
+use navfuse_gnss::{BeiDouEphemeris, GalileoEphemeris, GpsEphemeris, System};
+use navfuse_io::rinex_nav::{read_rinex_nav, RinexNav};
 use navfuse_io::rinex_obs::read_rinex_obs_all;
-use navfuse_io::ubx::{decode_ubx, read_ubx};
+use navfuse_io::ubx::{decode_ubx, read_ubx, UbxLog};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
@@ -167,21 +167,29 @@ fn compare(u: &GpsEphemeris, r: &GpsEphemeris) -> Vec<String> {
             ),
         ]
     };
-    f(u).into_iter()
-        .zip(f(r))
+    differing(&format!("G{:02}", u.prn), f(u), f(r))
+}
+
+/// The fields of `u` that differ from `r`'s beyond D19.12, named with `sat`.
+fn differing(sat: &str, u: Vec<(&str, f64)>, r: Vec<(&str, f64)>) -> Vec<String> {
+    u.into_iter()
+        .zip(r)
         .filter(|((_, a), (_, b))| !same(*a, *b))
-        .map(|((n, a), (_, b))| format!("G{:02} {n}: ubx {a:e} rinex {b:e}", u.prn))
+        .map(|((n, a), (_, b))| format!("{sat} {n}: ubx {a:e} rinex {b:e}"))
         .collect()
+}
+
+/// The walk log decoded and convbin's navigation file of it, or None (skipped).
+fn log_and_convbin_nav() -> Option<(UbxLog, RinexNav)> {
+    let (ubx, nav) = (data("gnss_1730.ubx")?, data("derived_rinex/gnss_1730.nav")?);
+    Some((read_ubx(&ubx).unwrap(), read_rinex_nav(&nav).unwrap()))
 }
 
 #[test]
 fn sfrbx_equals_convbin_nav() {
-    let (Some(ubx), Some(nav)) = (data("gnss_1730.ubx"), data("derived_rinex/gnss_1730.nav"))
-    else {
+    let Some((log, rinex)) = log_and_convbin_nav() else {
         return;
     };
-    let log = read_ubx(&ubx).unwrap();
-    let rinex = read_rinex_nav(&nav).unwrap();
     let mut bad = Vec::new();
     for r in &rinex.gps {
         match log
@@ -207,6 +215,215 @@ fn sfrbx_equals_convbin_nav() {
     assert!(!rinex.gps.is_empty());
     assert!(bad.is_empty());
     assert_eq!(log.nav.gps.len(), rinex.gps.len());
+    // The ionosphere and leap seconds of page 18 as convbin's header has them: the
+    // log holds no page 18 (subframe 4 SV IDs 60-63 only), so neither has any.
+    assert_eq!(log.nav.iono_alpha, rinex.iono_alpha);
+    assert_eq!(log.nav.iono_beta, rinex.iono_beta);
+    assert_eq!(log.nav.iono_alpha, None);
+    if let Some(l) = rinex.leap_seconds {
+        assert_eq!(log.nav.leap_seconds, Some(l));
+    }
+}
+
+/// The RINEX fields of a BeiDou record (RINEX 3.05 Table A14), as (name, value).
+fn bds_fields(e: &BeiDouEphemeris) -> Vec<(&'static str, f64)> {
+    let mut v = vec![
+        ("toc", secs(e.toc)),
+        ("af0", e.af0_s),
+        ("af1", e.af1_s_per_s),
+        ("af2", e.af2_s_per_s2),
+        ("aode", f64::from(e.aode)),
+        ("toe", secs(e.toe)),
+        ("ura", e.sv_accuracy_m),
+        ("sat_h1", f64::from(e.sat_h1)),
+        ("tgd1", e.tgd1_s),
+        ("tgd2", e.tgd2_s),
+        ("ttr", e.transmission_time.map_or(f64::NAN, secs)),
+        ("aodc", f64::from(e.aodc)),
+    ];
+    v.extend(kepler_fields(&e.orbit));
+    v
+}
+
+/// Seconds since the GPS epoch (any week count).
+fn secs(t: navfuse_gnss::GpsTime) -> f64 {
+    f64::from(t.week) * 604800.0 + t.sow
+}
+
+/// The Keplerian fields 1-16 of the common RINEX layout.
+fn kepler_fields(o: &navfuse_gnss::ephemeris::kepler::KeplerOrbit) -> Vec<(&'static str, f64)> {
+    vec![
+        ("crs", o.crs_m),
+        ("delta_n", o.delta_n_rad_per_s),
+        ("m0", o.m0_rad),
+        ("cuc", o.cuc_rad),
+        ("e", o.e),
+        ("cus", o.cus_rad),
+        ("sqrt_a", o.sqrt_a_sqrt_m),
+        ("toe_sow", o.toe_sow_s),
+        ("cic", o.cic_rad),
+        ("omega0", o.omega0_rad),
+        ("cis", o.cis_rad),
+        ("i0", o.i0_rad),
+        ("crc", o.crc_m),
+        ("omega", o.omega_rad),
+        ("omega_dot", o.omega_dot_rad_per_s),
+        ("idot", o.idot_rad_per_s),
+    ]
+}
+
+/// Every BeiDou D1/D2 record convbin wrote is decoded from RXM-SFRBX with every
+/// field equal to D19.12, and no other is decoded.
+#[test]
+fn sfrbx_beidou_equals_convbin_nav() {
+    let Some((log, rinex)) = log_and_convbin_nav() else {
+        return;
+    };
+    let mut bad = Vec::new();
+    for r in &rinex.beidou {
+        match log
+            .nav
+            .beidou
+            .iter()
+            .find(|u| u.prn == r.prn && u.toe == r.toe)
+        {
+            Some(u) => bad.extend(differing(
+                &format!("C{:02}", u.prn),
+                bds_fields(u),
+                bds_fields(r),
+            )),
+            None => bad.push(format!("C{:02} toe {:?}: not decoded", r.prn, r.toe)),
+        }
+    }
+    for u in &log.nav.beidou {
+        if !rinex
+            .beidou
+            .iter()
+            .any(|r| r.prn == u.prn && r.toe == u.toe)
+        {
+            bad.push(format!(
+                "C{:02} toe {:?}: decoded, not in the RINEX file",
+                u.prn, u.toe
+            ));
+        }
+    }
+    let prns: Vec<u8> = log.nav.beidou.iter().map(|e| e.prn).collect();
+    eprintln!(
+        "SFRBX: {} BeiDou ephemerides decoded ({prns:?}), RINEX nav {}, BeiDou pages {:?}, mismatches {}",
+        log.nav.beidou.len(),
+        rinex.beidou.len(),
+        log.sfrbx.beidou,
+        bad.len()
+    );
+    for b in &bad {
+        eprintln!("  {b}");
+    }
+    assert_eq!(rinex.beidou.len(), 8);
+    assert!(bad.is_empty());
+    assert_eq!(log.nav.beidou.len(), rinex.beidou.len());
+    assert_eq!(log.sfrbx.beidou.rejected, 0);
+}
+
+/// The RINEX fields of a Galileo record (RINEX 3.05 Table A8), as (name, value).
+fn gal_fields(e: &GalileoEphemeris) -> Vec<(&'static str, f64)> {
+    let mut v = vec![
+        ("toc", secs(e.toc)),
+        ("af0", e.af0_s),
+        ("af1", e.af1_s_per_s),
+        ("af2", e.af2_s_per_s2),
+        ("iodnav", f64::from(e.iodnav)),
+        ("data_sources", f64::from(e.data_sources)),
+        ("toe", secs(e.toe)),
+        ("sisa", e.sisa_m),
+        ("health", f64::from(e.health)),
+        ("bgd_e5a", e.bgd_e1_e5a_s),
+        ("bgd_e5b", e.bgd_e1_e5b_s),
+        ("ttr", e.transmission_time.map_or(f64::NAN, secs)),
+    ];
+    v.extend(kepler_fields(&e.orbit));
+    v
+}
+
+/// The Galileo I/NAV records against convbin's of the same pages
+/// (tests/data/walk_0827_galileo_convbin.nav: convbin skips 8-word E1-B messages,
+/// so the log's pages were given a ninth word; see tests/data/README.md).
+#[test]
+fn sfrbx_galileo_equals_convbin_of_padded_pages() {
+    let Some(ubx) = data("gnss_1730.ubx") else {
+        return;
+    };
+    let log = read_ubx(&ubx).unwrap();
+    let rinex = read_rinex_nav(
+        &PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/walk_0827_galileo_convbin.nav"),
+    )
+    .unwrap();
+    let mut bad = Vec::new();
+    let mut ttr = Vec::new();
+    for r in &rinex.galileo {
+        let key = |u: &&GalileoEphemeris| u.prn == r.prn && u.iodnav == r.iodnav && u.toe == r.toe;
+        match log.nav.galileo.iter().find(key) {
+            Some(u) => {
+                for d in differing(&format!("E{:02}", u.prn), gal_fields(u), gal_fields(r)) {
+                    // The transmission time is convbin's own choice (below).
+                    if d.contains(" ttr:") {
+                        ttr.push(d);
+                    } else {
+                        bad.push(d);
+                    }
+                }
+            }
+            None => bad.push(format!("E{:02} IODnav {}: not decoded", r.prn, r.iodnav)),
+        }
+    }
+    let extra: Vec<String> = log
+        .nav
+        .galileo
+        .iter()
+        .filter(|u| {
+            !rinex
+                .galileo
+                .iter()
+                .any(|r| r.prn == u.prn && r.iodnav == u.iodnav && r.toe == u.toe)
+        })
+        .map(|u| {
+            format!(
+                "E{:02} IODnav {} toe {} e {:.3} health {:#x}",
+                u.prn, u.iodnav, u.toe.sow, u.orbit.e, u.health
+            )
+        })
+        .collect();
+    eprintln!(
+        "SFRBX: {} Galileo ephemerides decoded, convbin (padded pages) {}, pages {:?}, CRC failures {}, field mismatches {}, transmission times differing {}, not in convbin's file {:?}",
+        log.nav.galileo.len(),
+        rinex.galileo.len(),
+        log.sfrbx.galileo,
+        log.sfrbx.galileo_crc_failures,
+        bad.len(),
+        ttr.len(),
+        extra
+    );
+    for b in bad.iter().chain(&ttr) {
+        eprintln!("  {b}");
+    }
+    assert_eq!(rinex.galileo.len(), 6);
+    assert!(bad.is_empty());
+    // convbin's transmission time is a word 5 of the set too, at most one subframe
+    // (30 s) later: E26 and E33 (their IODnav changed while the set was collected).
+    assert!(ttr.len() <= 2);
+    for u in &log.nav.galileo {
+        if let Some(r) = rinex
+            .galileo
+            .iter()
+            .find(|r| r.prn == u.prn && r.iodnav == u.iodnav)
+        {
+            let d = r
+                .transmission_time
+                .unwrap()
+                .diff_s(&u.transmission_time.unwrap());
+            assert!((0.0..=30.0).contains(&d), "E{:02}: {d}", u.prn);
+        }
+    }
+    assert_eq!(log.sfrbx.galileo_crc_failures, 0);
 }
 
 #[test]
@@ -276,6 +493,22 @@ fn seed_cut_decodes() {
     assert_eq!(log.sfrbx.not_decoded, 1);
     assert!(log.warnings.is_empty(), "{:?}", log.warnings);
     assert!(log.scan.skipped_bytes > 50);
+}
+
+/// The second fuzz seed (tests/data/fuzz/walk_0827_sfrbx.ubx): one BeiDou D1 and
+/// one Galileo I/NAV set from the walk log.
+#[test]
+fn sfrbx_seed_decodes() {
+    let d = std::fs::read(
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz/walk_0827_sfrbx.ubx"),
+    )
+    .unwrap();
+    let log = decode_ubx(&d, "seed2");
+    assert_eq!(log.nav.beidou.len(), 1);
+    assert_eq!(log.nav.beidou[0].prn, 21);
+    assert_eq!(log.nav.galileo.len(), 1);
+    assert_eq!(log.nav.galileo[0].prn, 7);
+    assert!(log.warnings.is_empty(), "{:?}", log.warnings);
 }
 
 /// Garbage, a checksum error and a truncated last frame: counted and warned with

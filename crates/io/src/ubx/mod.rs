@@ -1,7 +1,7 @@
 //! u-blox UBX binary logs (docs/FORMATS.md "u-blox UBX"): RXM-RAWX raw
-//! measurements as [`MultiObsEpoch`]s, RXM-SFRBX GPS LNAV subframes as
-//! [`GpsEphemeris`] records (in a [`RinexNav`], so the GNSS layer takes them as it
-//! takes a RINEX navigation file), NAV-PVT as receiver fixes. Other messages are
+//! measurements as [`MultiObsEpoch`]s, RXM-SFRBX navigation pages as ephemerides
+//! of GPS, QZSS, Galileo, BeiDou and GLONASS (in a [`RinexNav`], so the GNSS layer
+//! takes them as it takes a RINEX navigation file), NAV-PVT as receiver fixes. Other messages are
 //! skipped and counted. Damage (bytes outside frames, checksum errors, malformed
 //! messages, a truncated last frame) never stops the read: it is counted and
 //! reported as warnings with byte offsets.
@@ -28,7 +28,8 @@ pub struct UbxLog {
     pub epochs: Vec<MultiObsEpoch>,
     /// GLONASS frequency channels seen in RAWX (freqId - 7); no observation types.
     pub header: ObsSignalsHeader,
-    /// GPS ephemerides from RXM-SFRBX (no ionosphere: subframe 4 is not read).
+    /// Ephemerides of every system from RXM-SFRBX, GPS/QZSS/BeiDou Klobuchar and
+    /// Galileo NeQuick coefficients, GPS-UTC leap seconds (page 18, else RAWX).
     pub nav: RinexNav,
     /// NAV-PVT fixes (t = GPS seconds of week), valid ones only.
     pub fixes: Vec<GnssFix>,
@@ -52,12 +53,23 @@ impl UbxLog {
     pub fn summary(&self) -> String {
         let other: usize = self.other_messages.values().sum();
         format!(
-            "{} RXM-RAWX epochs ({} measurements, {} of unknown signals), {} GPS ephemerides from {} RXM-SFRBX, {} NAV-PVT fixes ({} invalid), {} other messages, {} bytes outside frames, {} checksum errors",
+            "{} RXM-RAWX epochs ({} measurements, {} of unknown signals), {} RXM-SFRBX ({}; taken/rejected: {}; {} not decoded) giving ephemerides G {} J {} E {} C {} R {}, {} NAV-PVT fixes ({} invalid), {} other messages, {} bytes outside frames, {} checksum errors",
             self.epochs.len(),
             self.rawx.measurements,
             self.rawx.unknown_signals,
-            self.nav.gps.len(),
             self.sfrbx.messages,
+            if self.nav.iono_alpha.is_some() {
+                "GPS ionosphere"
+            } else {
+                "no GPS ionosphere"
+            },
+            self.sfrbx.per_system(),
+            self.sfrbx.not_decoded,
+            self.nav.gps.len(),
+            self.nav.qzss.len(),
+            self.nav.galileo.len(),
+            self.nav.beidou.len(),
+            self.nav.glonass.len(),
             self.fixes.len(),
             self.pvt_invalid,
             other,
@@ -145,7 +157,14 @@ pub fn decode_ubx(data: &[u8], name: &str) -> UbxLog {
                 log.epochs.push(e);
                 Ok(())
             }),
-            (0x02, 0x13) => sf.decode(f.payload, week.or(pvt_week)),
+            (0x02, 0x13) => sf.decode(
+                f.payload,
+                sfrbx::RxContext {
+                    week: week.or(pvt_week),
+                    time: last_t,
+                    leap_seconds: raw.leap_seconds.map(i32::from),
+                },
+            ),
             (0x01, 0x07) => pvt::decode(f.payload).map(|p| {
                 if let Some(w) = p.utc.and_then(|u| pvt::week_from_utc(u, p.itow_s)) {
                     pvt_week = pvt_week.or(Some(w));
@@ -172,9 +191,23 @@ pub fn decode_ubx(data: &[u8], name: &str) -> UbxLog {
     log.leap_seconds = raw.leap_seconds;
     log.header.glonass_channels = raw.glonass_channels.clone();
     log.rawx = raw.counts.clone();
+    let (gps, qzss, galileo, beidou, glonass) = sf.take();
     log.sfrbx = sf.counts.clone();
-    log.nav.gps = std::mem::take(&mut sf.ephemerides);
-    log.nav.leap_seconds = log.leap_seconds.map(i32::from);
+    log.nav.gps = gps;
+    log.nav.qzss = qzss;
+    log.nav.galileo = galileo;
+    log.nav.beidou = beidou;
+    log.nav.glonass = glonass;
+    let io = &sf.iono;
+    if let Some((a, b)) = io.gps_klobuchar {
+        log.nav.iono_alpha = Some(a);
+        log.nav.iono_beta = Some(b);
+    }
+    log.nav.iono.qzss_klobuchar = io.qzss_klobuchar;
+    log.nav.iono.beidou_klobuchar = io.beidou_klobuchar;
+    log.nav.iono.galileo_nequick = io.galileo_nequick;
+    // GPS-UTC: the broadcast delta t_LS (subframe 4 page 18), else RAWX leapS.
+    log.nav.leap_seconds = io.gps_leap_seconds.or(log.leap_seconds.map(i32::from));
     let w = &mut log.warnings;
     let n_bad = scan.bad_checksums.len();
     for off in scan.bad_checksums.iter().take(MAX_WARNINGS) {
