@@ -194,6 +194,7 @@ pub fn run_config(sc: &Scenario, dir: &Path) -> RunConfig {
             heading = Some(HeadingSource {
                 path: dir.join("heading.txt"),
                 nmea: None,
+                ubx: None,
             });
         }
     }

@@ -195,5 +195,6 @@ pub(crate) fn heading_source(gnss_path: &Path) -> navfuse_io::input::HeadingSour
     navfuse_io::input::HeadingSource {
         path: gnss_path.with_file_name("heading.txt"),
         nmea: None,
+        ubx: None,
     }
 }
