@@ -3,7 +3,7 @@
 //! the inputs' forms on GPS time. Errors name the file, the byte offset where one
 //! is known, and the field; a log without the messages names what was expected.
 
-use super::esf::{EsfKind, EsfOdo, TimeMap, NOMINAL_TICK_S, TICK_TOLERANCE};
+use super::esf::{EsfKind, EsfOdo, TimeMap, NOMINAL_TICK_S};
 use super::UbxLog;
 use crate::error::InputError;
 use crate::input::{UbxHeading, UbxOdometer};
@@ -30,13 +30,13 @@ fn map_of(path: &Path, log: &UbxLog, kind: EsfKind, field: &str) -> Result<TimeM
 /// or had to be assumed.
 fn map_findings(path: &Path, m: &TimeMap, kind: EsfKind, warnings: &mut Vec<String>) -> String {
     let p = path.display();
-    if !m.fitted {
+    if m.fitted_tick_s.is_none() {
         warnings.push(format!(
             "{p}: {}: the navigation epochs span too little (or are too few: {}) to fit the sensor time tag unit: the u-blox default 1 ms is assumed",
             kind.name(),
             m.anchors
         ));
-    } else if (m.tick_s / NOMINAL_TICK_S - 1.0).abs() > TICK_TOLERANCE {
+    } else if m.tick_s != NOMINAL_TICK_S {
         warnings.push(format!(
             "{p}: {}: the sensor time tags count {:.6} ms, not the u-blox default 1 ms (CFG-SFCORE-SEN_TTAG_FACT): the fitted unit is used",
             kind.name(),

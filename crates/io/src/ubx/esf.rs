@@ -91,13 +91,15 @@ pub struct TimeMap {
     pub tag0: u64,
     pub t0_s: f64,
     pub tick_s: f64,
-    /// Anchors used (after outlier rejection) and their RMS / largest residual [s].
+    /// Anchors used (after outlier rejection), the RMS of their offsets about the
+    /// median and the spread (largest - smallest) [s].
     pub anchors: usize,
     pub rejected: usize,
     pub rms_s: f64,
     pub max_s: f64,
-    /// True: the tick was fitted; false: 1 ms assumed (too few anchors / short span).
-    pub fitted: bool,
+    /// The least-squares tick; None: too few anchors or too short a span (1 ms
+    /// assumed). Within [`TICK_TOLERANCE`] of 1 ms the tick is 1 ms.
+    pub fitted_tick_s: Option<f64>,
 }
 
 impl TimeMap {
@@ -108,10 +110,15 @@ impl TimeMap {
     /// A one-line account for the run notes.
     pub fn describe(&self, kind: EsfKind) -> String {
         format!(
-            "{} sensor time -> GPST: tick {:.6} ms ({}), {} anchors ({} rejected), residual RMS {:.1} ms, max {:.1} ms (the receiver's output latency is not in these figures)",
+            "{} sensor time -> GPST: tick {:.6} ms ({}), {} anchors ({} rejected), offsets {:.1} ms RMS, spread {:.1} ms (the receiver's output latency is not in these figures)",
             kind.name(),
             self.tick_s * 1e3,
-            if self.fitted { "fitted" } else { "assumed: u-blox default" },
+            match self.fitted_tick_s {
+                None => "assumed: the u-blox default".to_string(),
+                Some(f) if self.tick_s == NOMINAL_TICK_S =>
+                    format!("the u-blox default; the fit gives {:.6} ms", f * 1e3),
+                Some(_) => "fitted".to_string(),
+            },
             self.anchors,
             self.rejected,
             self.rms_s * 1e3,
@@ -463,17 +470,23 @@ pub fn decode(frames: &[Frame<'_>], name: &str) -> EsfLog {
 /// - No anchor: Err (the log has no navigation message after sensor data).
 /// - Anchors spanning less than [`MIN_FIT_SPAN_S`] or fewer than 3: the tick is the
 ///   documented 1 ms, the offset the median of t - tag x 1 ms.
-/// - Else least squares, then once more without the anchors further than
-///   max(4 x 1.4826 MAD, 5 ms) from the line; a tick off 1 ms by more than
-///   [`TICK_TOLERANCE`] is kept (the tags count another unit) and the caller warns.
-/// - A non-positive tick or an RMS residual above [`MAX_RESIDUAL_RMS_S`]: Err.
+/// - Else the tick by least squares, then once more without the anchors further
+///   than max(4 x 1.4826 MAD, 5 ms) from the line; within [`TICK_TOLERANCE`] of
+///   1 ms it is 1 ms (a short fit takes the drift of the pairing's latency, below,
+///   for a rate: 0.026 % on the demo), else kept (another unit; the caller warns).
+/// - The offset: the 10th percentile of t - tag x tick over the anchors kept (the
+///   epochs whose message followed a sensor output most closely).
+/// - A non-positive tick or offsets scattering more than [`MAX_RESIDUAL_RMS_S`]
+///   RMS: Err.
 ///
 /// Accuracy: the anchors pair an epoch with the last sensor tag *output* before the
 /// epoch's message, so the mapped times carry the difference between the
 /// navigation output latency and the sensor output delay as a constant bias (tens
 /// of ms on real receivers; not observable from the log: correct it with
-/// `imu.time_offset_s` or estimate it with `[filter] time_offset`). The residual
-/// RMS is the jitter of that pairing.
+/// `imu.time_offset_s` or estimate it with `[filter] time_offset`). With sensor
+/// data output in batches, that latency varies from epoch to epoch by up to a
+/// batch period; the low percentile takes its smallest value, which does not
+/// depend on the batches' phase.
 pub fn fit_time_map(anchors: &[(u64, f64)], kind: EsfKind) -> Result<TimeMap, String> {
     let what = kind.name();
     let Some(&(tag0, _)) = anchors.first() else {
@@ -497,14 +510,8 @@ pub fn fit_time_map(anchors: &[(u64, f64)], kind: EsfKind) -> Result<TimeMap, St
             .collect()
     };
     let all = vec![true; xs.len()];
-    let (t0, tick, keep, fitted) = if anchors.len() < 3 || span < MIN_FIT_SPAN_S {
-        let t0 = median(
-            xs.iter()
-                .zip(&ys)
-                .map(|(x, y)| y - x * NOMINAL_TICK_S)
-                .collect(),
-        );
-        (t0, NOMINAL_TICK_S, all, false)
+    let (tick, keep, fitted_tick_s) = if anchors.len() < 3 || span < MIN_FIT_SPAN_S {
+        (NOMINAL_TICK_S, all, None)
     } else {
         let lsq = |keep: &[bool]| -> Option<(f64, f64)> {
             let pts: Vec<(f64, f64)> = xs
@@ -533,23 +540,40 @@ pub fn fit_time_map(anchors: &[(u64, f64)], kind: EsfKind) -> Result<TimeMap, St
         let mad = median(r.iter().map(|v| v.abs()).collect());
         let lim = (4.0 * 1.4826 * mad).max(0.005);
         let keep: Vec<bool> = r.iter().map(|v| v.abs() <= lim).collect();
-        match lsq(&keep) {
-            Some((a, b)) => (a, b, keep, true),
-            None => (a, b, all, true),
-        }
+        let b = lsq(&keep).map_or(b, |f| f.1);
+        // The pairing's bias drifts with the phase of the sensor batches against the
+        // epochs, which a short fit takes for a rate: near 1 ms, 1 ms it is.
+        let tick = if (b / NOMINAL_TICK_S - 1.0).abs() <= TICK_TOLERANCE {
+            NOMINAL_TICK_S
+        } else {
+            b
+        };
+        (tick, keep, Some(b))
     };
-    if !(tick > 0.0 && tick.is_finite() && t0.is_finite()) {
+    if !(tick > 0.0 && tick.is_finite()) {
         return Err(format!(
             "{what}: cannot map the sensor time tags to GPS time: the fitted tick is {tick} s (time tags not increasing with GPS time)"
         ));
     }
-    let r = residuals(t0, tick, &keep);
-    let used = r.len();
-    let rms = (r.iter().map(|v| v * v).sum::<f64>() / used as f64).sqrt();
-    let max = r.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    if rms > MAX_RESIDUAL_RMS_S {
+    // Offsets y - x tick of the anchors kept: each is the true offset minus the
+    // pairing's latency; the 10th percentile is the epochs whose message followed
+    // a sensor output most closely (the least latency, robust to a few late ones).
+    let mut o: Vec<f64> = xs
+        .iter()
+        .zip(&ys)
+        .zip(&keep)
+        .filter(|(_, &k)| k)
+        .map(|((x, y), _)| y - x * tick)
+        .collect();
+    o.sort_by(f64::total_cmp);
+    let used = o.len();
+    let t0 = o[(used - 1) / 10];
+    let mid = o[used / 2];
+    let rms = (o.iter().map(|v| (v - mid).powi(2)).sum::<f64>() / used as f64).sqrt();
+    let max = o[used - 1] - o[0];
+    if !t0.is_finite() || rms > MAX_RESIDUAL_RMS_S {
         return Err(format!(
-            "{what}: cannot map the sensor time tags to GPS time: the {used} anchors scatter {:.3} s RMS about the best line (more than {MAX_RESIDUAL_RMS_S} s): the tags are not one steady clock (a receiver reset or a merged log?)",
+            "{what}: cannot map the sensor time tags to GPS time: the {used} anchors scatter {:.3} s RMS about the line (more than {MAX_RESIDUAL_RMS_S} s): the tags are not one steady clock (a receiver reset or a merged log?)",
             rms
         ));
     }
@@ -561,7 +585,7 @@ pub fn fit_time_map(anchors: &[(u64, f64)], kind: EsfKind) -> Result<TimeMap, St
         rejected: anchors.len() - used,
         rms_s: rms,
         max_s: max,
-        fitted,
+        fitted_tick_s,
     })
 }
 
@@ -589,13 +613,18 @@ mod tests {
             .collect();
         a[40].1 += 0.5;
         let m = fit_time_map(&a, EsfKind::Raw).unwrap();
-        assert!(m.fitted);
         assert_eq!(m.rejected, 1);
-        assert!((m.tick_s - 1.0001e-3).abs() < 1e-8, "{m:?}");
-        assert!((m.t(a[10].0) - 1010.0).abs() < 1e-3);
+        // within 0.1 % of 1 ms: 1 ms
+        assert!((m.fitted_tick_s.unwrap() - 1.0001e-3).abs() < 1e-8, "{m:?}");
+        assert_eq!(m.tick_s, NOMINAL_TICK_S);
+        // another unit (0.5 ms): kept
+        let h: Vec<(u64, f64)> = a.iter().map(|&(x, y)| (2 * x, y)).collect();
+        let m = fit_time_map(&h, EsfKind::Raw).unwrap();
+        assert!((m.tick_s - 0.50005e-3).abs() < 1e-8, "{m:?}");
+        assert!((m.t(h[10].0) - 1010.0).abs() < 1e-3);
         // too short: the documented 1 ms
         let m = fit_time_map(&a[..3], EsfKind::Raw).unwrap();
-        assert!(!m.fitted && m.tick_s == NOMINAL_TICK_S);
+        assert!(m.fitted_tick_s.is_none() && m.tick_s == NOMINAL_TICK_S);
         assert!(fit_time_map(&[], EsfKind::Meas).is_err());
         // scattered: refused
         let s: Vec<(u64, f64)> = (0..50)

@@ -108,18 +108,31 @@ pub fn esf_meas(tag: u32, data: &[(u8, u32)]) -> Vec<u8> {
     frame(0x10, 0x02, &p)
 }
 
-/// A valid 3D NAV-PVT at `itow_ms` of [`WEEK`] (UTC date and time from it, 18 leap
-/// seconds), static at 47.4 N 8.5 E 500 m.
+/// A valid 3D NAV-PVT at `itow_ms` of [`WEEK`]; see [`nav_pvt_at`].
 pub fn nav_pvt(itow_ms: u32) -> Vec<u8> {
+    nav_pvt_at(WEEK, itow_ms)
+}
+
+/// A valid 3D NAV-PVT at `itow_ms` of GPS week `week` (its UTC date and time with
+/// 18 leap seconds, as from 2017), static at 47.4 N 8.5 E 500 m.
+pub fn nav_pvt_at(week: i32, itow_ms: u32) -> Vec<u8> {
     let mut p = vec![0u8; super::pvt::LEN];
     p[0..4].copy_from_slice(&itow_ms.to_le_bytes());
-    // UTC = GPST - 18 s; week 2306 starts 2024-03-17 (Sunday).
-    let utc_s = i64::from(itow_ms / 1000) - 18;
-    let day = 17 + utc_s.div_euclid(86_400);
+    let utc_s = i64::from(week) * 604_800 + i64::from(itow_ms / 1000) - 18;
+    // Civil date of Unix day z (H. Hinnant's civil_from_days); GPS day 0 = Unix 3657.
+    let z = 3657 + utc_s.div_euclid(86_400) + 719_468;
     let sod = utc_s.rem_euclid(86_400);
-    p[4..6].copy_from_slice(&2024u16.to_le_bytes());
-    p[6] = 3;
-    p[7] = day.clamp(1, 31) as u8;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = doy - (153 * mp + 2) / 5 + 1;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 };
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    p[4..6].copy_from_slice(&(year as u16).to_le_bytes());
+    p[6] = month as u8;
+    p[7] = day as u8;
     p[8] = (sod / 3600) as u8;
     p[9] = (sod / 60 % 60) as u8;
     p[10] = (sod % 60) as u8;
