@@ -18,8 +18,9 @@
 //!
 //! Time: the tags count receiver-local sensor time (1 ms by default,
 //! CFG-SFCORE-SEN_TTAG_FACT), with no GPS time in the message. The mapping is a
-//! straight line fitted to anchors: each navigation epoch's GPS time (NAV-PVT and
-//! NAV-RELPOSNED iTOW, RXM-RAWX rcvTow; the first message of each epoch) paired with
+//! straight line fitted to anchors: each navigation epoch's GPS time (NAV-PVT iTOW
+//! with validTime, NAV-RELPOSNED iTOW with gnssFixOK, RXM-RAWX rcvTow with a week;
+//! the first message of each epoch) paired with
 //! the last sensor tag of the same message kind seen before it in the file. See
 //! [`fit_time_map`] for the rules and what the fit cannot know.
 
@@ -320,9 +321,17 @@ impl Grouper {
 fn epoch_time(f: &Frame<'_>) -> Option<f64> {
     let p = f.payload;
     match (f.class, f.id) {
-        (0x01, 0x07) if p.len() == super::pvt::LEN => Some(f64::from(u32_at(p, 0)) * 1e-3),
-        (0x01, 0x3C) if p.len() >= 8 => Some(f64::from(u32_at(p, 4)) * 1e-3),
-        (0x02, 0x15) if p.len() >= 16 => {
+        // NAV-PVT with validTime; NAV-RELPOSNED with gnssFixOK; RXM-RAWX with a week.
+        (0x01, 0x07) if p.len() == super::pvt::LEN && p[11] & 2 != 0 => {
+            Some(f64::from(u32_at(p, 0)) * 1e-3)
+        }
+        (0x01, 0x3C)
+            if (p.len() == 40 && p[0] == 0 && p[36] & 1 != 0)
+                || (p.len() == 64 && p[0] == 1 && p[60] & 1 != 0) =>
+        {
+            Some(f64::from(u32_at(p, 4)) * 1e-3)
+        }
+        (0x02, 0x15) if p.len() >= 16 && u16_at(p, 8) > 0 => {
             let tow = super::frame::f64_at(p, 0);
             tow.is_finite().then_some(tow)
         }
