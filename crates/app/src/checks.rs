@@ -177,7 +177,7 @@ pub(crate) fn imu_window(cfg: &RunConfig, fix_lla: Option<Vector3<f64>>) -> Vec<
             },
             csv: true,
         },
-        ImuFormat::KfGins | ImuFormat::Ulog { .. } => plausibility::ImuUnits {
+        ImuFormat::KfGins | ImuFormat::Ulog { .. } | ImuFormat::Ubx => plausibility::ImuUnits {
             accel_scale: 1.0,
             gyro_scale: 1.0,
             csv: false,

@@ -98,9 +98,16 @@ pub(crate) fn read(cfg: &RunConfig, job: &mut JobResult, warn: bool) -> Result<I
     let mut heading_week = gnss_week;
     let mut heading: Vec<HeadingObs> = match &cfg.heading {
         Some(src) if cfg.nav.heading.baseline_b.is_some() => {
-            let h = match &src.nmea {
-                None => read_heading_report(&src.path, src.skip_lines, &mut reader_warnings)?,
-                Some(o) => {
+            let h = match (&src.nmea, &src.ubx) {
+                (None, Some(u)) => {
+                    let log = navfuse_io::ubx::read_ubx(&src.path)?;
+                    reader_warnings.extend(log.warnings.iter().cloned());
+                    navfuse_io::ubx::aiding::headings(&src.path, &log, *u, &mut reader_warnings)?
+                }
+                (None, None) => {
+                    read_heading_report(&src.path, src.skip_lines, &mut reader_warnings)?
+                }
+                (Some(o), _) => {
                     let d = navfuse_io::nmea::read_nmea(&src.path, o)?;
                     reader_warnings.extend(d.warnings);
                     heading_week = d.gps_week.or(gnss_week);

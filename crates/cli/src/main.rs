@@ -32,7 +32,7 @@ a dual antenna; odometer, non-holonomic constraint, zero velocity; barometric al
 spoofing with dead-reckoning fallback.\n\n\
 Inputs: KF-GINS text files, CSV IMU logs (one file or several), the rtklibexplorer raw IMU log, RTKLIB .pos solutions, NMEA \
 0183 and generic CSV fixes, RINEX observation and navigation files of GPS, GLONASS, Galileo, BeiDou and QZSS (SP3 and clock \
-files), u-blox UBX (RXM-RAWX, RXM-SFRBX, NAV-PVT), PX4 ULog (IMU, GPS, barometer; EKF2's estimate for eval), odometer, \
+files), u-blox UBX (RXM-RAWX, RXM-SFRBX, NAV-PVT; ESF-RAW / ESF-MEAS IMU and wheel ticks, NAV-RELPOSNED heading), PX4 ULog (IMU, GPS, barometer; EKF2's estimate for eval), odometer, \
 heading and barometer logs, DGPS corrections. \
 Outputs: KF-GINS .nav / IMU_ERR / STD files, CSV with the solution state, innovations, extra states, the \
 configuration used, events and integrity logs; exports (.pos, NMEA, KML, GeoJSON, GPX); `report` draws an \

@@ -126,6 +126,9 @@ pub enum ImuFormat {
     },
     /// Several CSV files joined (imu/join.rs).
     CsvFiles(Box<CsvImuFiles>),
+    /// u-blox UBX ESF-RAW (else ESF-MEAS) IMU data, sensor time mapped to GPS time
+    /// (docs/FORMATS.md "ESF-RAW and ESF-MEAS").
+    Ubx,
 }
 
 /// One gyro or accelerometer file of [`CsvImuFiles`].
@@ -397,6 +400,20 @@ pub enum OdometerFormat {
     /// The simulator's odometer.txt, 4 columns `t cumulative_pulses
     /// pulses_in_interval speed`: read like `Pulses` from the cumulative count.
     Navfuse { meters_per_pulse: f64 },
+    /// A u-blox UBX log's ESF-MEAS wheel ticks or speed (docs/FORMATS.md "ESF-RAW
+    /// and ESF-MEAS"); times are GPS times of the log.
+    Ubx(UbxOdometer),
+}
+
+/// Which ESF-MEAS odometer data a UBX log gives (`odometer.ubx_measurement`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum UbxOdometer {
+    /// Wheel ticks: the single tick (data type 10) when the log has it, else the
+    /// mean of the rear wheels (8, 9), else of the front wheels (6, 7); speed =
+    /// meters_per_pulse x ticks / dt, signed by the direction bit.
+    Ticks { meters_per_pulse: f64 },
+    /// The speed (data type 11, 1e-3 m/s), instantaneous.
+    Speed,
 }
 
 /// Where the odometer data come from. Times are on the IMU time scale.
@@ -418,6 +435,15 @@ pub struct HeadingSource {
     /// 3-column text: lines to skip at the top; None: a first line with no number
     /// is a header.
     pub skip_lines: Option<usize>,
+    /// Some: a u-blox UBX log's NAV-RELPOSNED headings instead (not with `nmea`).
+    pub ubx: Option<UbxHeading>,
+}
+
+/// NAV-RELPOSNED headings of a UBX log (`heading.format = "ubx"`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct UbxHeading {
+    /// Also take headings with float ambiguities (carrSoln 1); else fixed only.
+    pub float_ok: bool,
 }
 
 /// The aiding inputs on the IMU time scale that need no week alignment, read and

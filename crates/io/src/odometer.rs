@@ -41,6 +41,15 @@ fn read(
     mut warnings: Option<&mut Vec<String>>,
 ) -> Result<Vec<OdometerSample>, InputError> {
     let path = src.path.as_path();
+    if let OdometerFormat::Ubx(how) = src.format {
+        let log = crate::ubx::read_ubx(path)?;
+        let mut w = log.warnings.clone();
+        let out = crate::ubx::aiding::odometer(path, &log, how, &mut w)?;
+        if let Some(ws) = warnings {
+            ws.extend(w);
+        }
+        return Ok(out);
+    }
     let (ncols, what) = match src.format {
         OdometerFormat::Speed { .. } => (2, "t, speed [m/s]"),
         OdometerFormat::Pulses { .. } => (2, "t, cumulative pulses"),
@@ -48,9 +57,10 @@ fn read(
             4,
             "t, cumulative pulses, pulses in the interval, speed [m/s]",
         ),
+        OdometerFormat::Ubx(_) => (2, "not reached: read above"),
     };
     let meters_per_pulse = match src.format {
-        OdometerFormat::Speed { .. } => None,
+        OdometerFormat::Speed { .. } | OdometerFormat::Ubx(_) => None,
         OdometerFormat::Pulses { meters_per_pulse }
         | OdometerFormat::Navfuse { meters_per_pulse } => {
             let k =
@@ -114,6 +124,7 @@ fn read(
                     }
                     prev = Some((t, 0.0));
                 }
+                OdometerFormat::Ubx(_) => {}
                 OdometerFormat::Pulses { .. } | OdometerFormat::Navfuse { .. } => {
                     let pulses = num(1, "pulses")?;
                     if let OdometerFormat::Navfuse { .. } = src.format {

@@ -913,3 +913,68 @@ fn gnss_signals_and_orbits_keys() {
         "needs sp3",
     );
 }
+
+#[test]
+fn ubx_imu_odometer_and_heading() {
+    use navfuse_io::input::{ImuFormat, UbxHeading, UbxOdometer};
+    let text = with(
+        "[odometer]\nfile = \"rx.ubx\"\nformat = \"ubx\"\nmeters_per_pulse = 0.0125\n\n\
+         [heading]\nfile = \"rx.ubx\"\nformat = \"ubx\"\nubx_carrier = \"float\"\nbaseline_m = [1.2, 0, 0]\n",
+    )
+    .replace("format = \"kf-gins\"", "format = \"ubx\"");
+    let c = ok("ubx_all.toml", &text);
+    assert_eq!(c.imu.format, ImuFormat::Ubx);
+    assert_eq!(
+        c.odometer.as_ref().unwrap().format,
+        OdometerFormat::Ubx(UbxOdometer::Ticks {
+            meters_per_pulse: 0.0125
+        })
+    );
+    let h = c.heading.as_ref().unwrap();
+    assert_eq!(h.ubx, Some(UbxHeading { float_ok: true }));
+    assert!(h.nmea.is_none());
+    let d = round_trip("ubx_all", &c);
+    assert_eq!(d.imu.format, ImuFormat::Ubx);
+    let c = ok(
+        "ubx_speed.toml",
+        &with("[odometer]\nfile = \"rx.ubx\"\nformat = \"ubx\"\nubx_measurement = \"speed\"\n\n[heading]\nfile = \"rx.ubx\"\nformat = \"ubx\"\nbaseline_m = [1, 0, 0]"),
+    );
+    assert_eq!(
+        c.odometer.as_ref().unwrap().format,
+        OdometerFormat::Ubx(UbxOdometer::Speed)
+    );
+    assert_eq!(
+        c.heading.as_ref().unwrap().ubx,
+        Some(UbxHeading { float_ok: false })
+    );
+    round_trip("ubx_speed", &c);
+    let o = |body: &str| format!("[odometer]\nfile = \"rx.ubx\"\n{body}");
+    check_err(
+        "ubx_e0.toml",
+        &o("format = \"ubx\""),
+        "odometer.meters_per_pulse",
+        "[odometer]",
+        "required for UBX wheel ticks",
+    );
+    check_err(
+        "ubx_e1.toml",
+        &o("format = \"ubx\"\nubx_measurement = \"speed\"\nmeters_per_pulse = 0.01"),
+        "odometer.meters_per_pulse",
+        "meters_per_pulse",
+        "not to the UBX speed",
+    );
+    check_err(
+        "ubx_e2.toml",
+        &o("format = \"speed\"\nubx_measurement = \"speed\""),
+        "odometer.ubx_measurement",
+        "ubx_measurement",
+        "applies only to odometer.format = \"ubx\"",
+    );
+    check_err(
+        "ubx_e3.toml",
+        "[heading]\nfile = \"h.txt\"\nubx_carrier = \"fixed\"\nbaseline_m = [1, 0, 0]",
+        "heading.ubx_carrier",
+        "ubx_carrier",
+        "applies only to heading.format = \"ubx\"",
+    );
+}

@@ -526,6 +526,75 @@ fn ubx(p: &Path) -> Result<(), String> {
     Ok(())
 }
 
+/// `data` with the checksum of every frame-like run (`B5 62`, class, id, length
+/// that fits) recomputed: mutated payloads then reach the message decoders.
+fn repair_ubx_checksums(data: &[u8]) -> Vec<u8> {
+    let mut d = data.to_vec();
+    let mut i = 0;
+    while i + 8 <= d.len() {
+        if d[i] != 0xB5 || d[i + 1] != 0x62 {
+            i += 1;
+            continue;
+        }
+        let len = usize::from(u16::from_le_bytes([d[i + 4], d[i + 5]]));
+        let end = i + 6 + len + 2;
+        if end > d.len() {
+            i += 1;
+            continue;
+        }
+        let (a, b) = navfuse_io::ubx::frame::checksum(&d[i + 2..i + 6 + len]);
+        d[end - 2] = a;
+        d[end - 1] = b;
+        i = end;
+    }
+    d
+}
+
+/// ESF-RAW / ESF-MEAS / NAV-RELPOSNED of a UBX log, as read and with the checksums
+/// repaired: the IMU through `open_imu`, the odometer (ticks and speed) and the
+/// headings: values finite, stds usable, times increasing; never a panic.
+fn ubx_esf(p: &Path) -> Result<(), String> {
+    let Ok(data) = std::fs::read(p) else {
+        return Ok(());
+    };
+    let fixed = p.with_extension("fixed.ubx");
+    std::fs::write(&fixed, repair_ubx_checksums(&data)).map_err(|e| e.to_string())?;
+    for f in [p, fixed.as_path()] {
+        check_imu(&imu_src(f, ImuFormat::Ubx, 50.0))?;
+        let Ok(log) = navfuse_io::ubx::read_ubx(f) else {
+            continue;
+        };
+        for how in [
+            UbxOdometer::Ticks {
+                meters_per_pulse: 0.02,
+            },
+            UbxOdometer::Speed,
+        ] {
+            if let Ok(o) = navfuse_io::ubx::aiding::odometer(f, &log, how, &mut Vec::new()) {
+                let mut prev = None;
+                for s in &o {
+                    increasing("odometer time", &mut prev, s.t)?;
+                    finite("odometer speed", s.speed_mps)?;
+                    finite("odometer interval", s.interval_s)?;
+                }
+            }
+        }
+        for float_ok in [false, true] {
+            let how = UbxHeading { float_ok };
+            if let Ok(h) = navfuse_io::ubx::aiding::headings(f, &log, how, &mut Vec::new()) {
+                let mut prev = None;
+                for x in &h {
+                    increasing("heading time", &mut prev, x.t)?;
+                    finite("heading", x.heading_rad)?;
+                    std_ok("heading std", x.std_rad)?;
+                }
+            }
+        }
+        let _ = log.summary();
+    }
+    Ok(())
+}
+
 fn targets() -> Vec<Target> {
     let t = |name, ext, seeds: &[&str], check| Target {
         name,
@@ -632,6 +701,13 @@ fn targets() -> Vec<Target> {
             ],
             ubx,
         ),
+        // No real ESF / RELPOSNED log: a synthetic 3 s one (ubx::synth).
+        Target {
+            name: "ubx_esf",
+            ext: "ubx",
+            seeds: vec![navfuse_io::ubx::synth::synthetic_esf_log(3)],
+            check: ubx_esf,
+        },
     ]
 }
 

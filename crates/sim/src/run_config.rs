@@ -197,6 +197,7 @@ pub fn run_config(sc: &Scenario, dir: &Path) -> RunConfig {
                 path: dir.join("heading.txt"),
                 nmea: None,
                 skip_lines: None,
+                ubx: None,
             });
         }
     }

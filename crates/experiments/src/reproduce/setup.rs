@@ -198,5 +198,6 @@ pub(crate) fn heading_source(gnss_path: &Path) -> navfuse_io::input::HeadingSour
         path: gnss_path.with_file_name("heading.txt"),
         nmea: None,
         skip_lines: None,
+        ubx: None,
     }
 }

@@ -12,7 +12,7 @@ use super::units::{arr3, vec3, DEG, SAME};
 use super::validate::{gate, opt_or, positive, std_pos, v3};
 use super::values::Gate;
 use crate::error::check_scale;
-use crate::input::HeadingSource;
+use crate::input::{HeadingSource, UbxHeading};
 
 #[derive(Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
@@ -24,6 +24,9 @@ pub(super) struct THeading {
     pub(super) format: Option<THeadingFormat>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) date: Option<String>,
+    /// `format = "ubx"`: `"fixed"` (default) or `"float"` (fixed or float).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) ubx_carrier: Option<TUbxCarrier>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) skip_lines: Option<usize>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -46,6 +49,15 @@ pub(super) struct THeading {
 pub(super) enum THeadingFormat {
     Text,
     Nmea,
+    Ubx,
+}
+
+/// `heading.ubx_carrier`: the carrier solutions whose headings are used.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub(super) enum TUbxCarrier {
+    Fixed,
+    Float,
 }
 
 pub(super) fn convert(
@@ -76,21 +88,31 @@ pub(super) fn convert(
                         .map_err(|m| kerr("heading.std_deg", m))
                 })
                 .transpose()?;
-            let nmea = match h.format.unwrap_or(THeadingFormat::Text) {
+            let format = h.format.unwrap_or(THeadingFormat::Text);
+            if format != THeadingFormat::Ubx && h.ubx_carrier.is_some() {
+                return Err(kerr(
+                    "heading.ubx_carrier",
+                    "applies only to heading.format = \"ubx\"",
+                ));
+            }
+            let ubx = (format == THeadingFormat::Ubx).then(|| UbxHeading {
+                float_ok: h.ubx_carrier == Some(TUbxCarrier::Float),
+            });
+            let nmea = match format {
                 THeadingFormat::Nmea => Some(super::gnss_text::nmea(
                     "heading.date",
                     h.date.as_deref(),
                     None,
                 )?),
-                THeadingFormat::Text if h.date.is_some() => {
+                THeadingFormat::Text | THeadingFormat::Ubx if h.date.is_some() => {
                     return Err(kerr(
                         "heading.date",
                         "applies only to heading.format = \"nmea\"",
                     ))
                 }
-                THeadingFormat::Text => None,
+                THeadingFormat::Text | THeadingFormat::Ubx => None,
             };
-            if nmea.is_some() && h.skip_lines.is_some() {
+            if format != THeadingFormat::Text && h.skip_lines.is_some() {
                 return Err(kerr(
                     "heading.skip_lines",
                     "applies only to the 3-column text (heading.format = \"text\")",
@@ -100,6 +122,7 @@ pub(super) fn convert(
                 Some(HeadingSource {
                     path,
                     nmea,
+                    ubx,
                     skip_lines: h.skip_lines,
                 }),
                 Some(vec3(b)),
@@ -113,6 +136,7 @@ pub(super) fn convert(
                 ("heading.format", h.format.is_some()),
                 ("heading.date", h.date.is_some()),
                 ("heading.skip_lines", h.skip_lines.is_some()),
+                ("heading.ubx_carrier", h.ubx_carrier.is_some()),
             ] {
                 if given {
                     return Err(kerr(
@@ -159,9 +183,18 @@ pub(super) fn to_toml(
     let dual = src.filter(|_| hd.baseline_b.is_some());
     THeading {
         file: dual.map(|h| w.path(&h.path)),
-        format: dual
-            .and_then(|h| h.nmea.as_ref())
-            .map(|_| THeadingFormat::Nmea),
+        format: dual.and_then(|h| match (&h.nmea, &h.ubx) {
+            (Some(_), _) => Some(THeadingFormat::Nmea),
+            (None, Some(_)) => Some(THeadingFormat::Ubx),
+            (None, None) => None,
+        }),
+        ubx_carrier: dual.and_then(|h| h.ubx).map(|u| {
+            if u.float_ok {
+                TUbxCarrier::Float
+            } else {
+                TUbxCarrier::Fixed
+            }
+        }),
         date: dual
             .and_then(|h| h.nmea.as_ref())
             .and_then(super::gnss_text::nmea_date_to_toml),

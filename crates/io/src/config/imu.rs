@@ -23,6 +23,8 @@ pub(super) enum TImuFormat {
     RtklibExplorer,
     #[serde(rename = "ulog")]
     Ulog,
+    #[serde(rename = "ubx")]
+    Ubx,
 }
 
 #[derive(Debug, Deserialize, Serialize)]
@@ -116,6 +118,7 @@ pub(super) fn convert(m: &TImu, base: &Path) -> KResult<ImuSource> {
     }
     let format = match m.format {
         TImuFormat::KfGins => ImuFormat::KfGins,
+        TImuFormat::Ubx => ImuFormat::Ubx,
         TImuFormat::Ulog => ImuFormat::Ulog {
             multi_id: m.ulog_instance.unwrap_or(0),
         },
@@ -164,6 +167,7 @@ pub(super) fn to_toml(m: &ImuSource, w: &PathWriter) -> TImu {
         }
         ImuFormat::KfGins => (TImuFormat::KfGins, None, None),
         ImuFormat::Ulog { .. } => (TImuFormat::Ulog, None, None),
+        ImuFormat::Ubx => (TImuFormat::Ubx, None, None),
         ImuFormat::RtklibExplorer(o) => {
             (TImuFormat::RtklibExplorer, Some(w.path(&o.tag_path)), None)
         }

@@ -11,7 +11,7 @@ use super::paths::{file_key, PathWriter};
 use super::units::{PPM, PPM_SQRTH_PSD, SAME};
 use super::validate::{finite, gate, non_negative, opt_or, positive, std_pos};
 use super::values::Gate;
-use crate::input::{OdometerFormat, OdometerSource};
+use crate::input::{OdometerFormat, OdometerSource, UbxOdometer};
 
 /// `odometer.format`. A raw type: `OdometerFormat`'s variants carry
 /// `meters_per_pulse` / `speed_is_mean`, which are keys of their own.
@@ -23,6 +23,16 @@ pub(super) enum TOdoFormat {
     Pulses,
     #[serde(rename = "navfuse")]
     Navfuse,
+    #[serde(rename = "ubx")]
+    Ubx,
+}
+
+/// `odometer.ubx_measurement` (`format = "ubx"`).
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub(super) enum TUbxOdo {
+    Ticks,
+    Speed,
 }
 
 #[derive(Debug, Deserialize, Serialize)]
@@ -36,6 +46,7 @@ pub(super) struct TOdometer {
     pub(super) speed_is_mean: Option<bool>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) skip_lines: Option<usize>,
+    pub(super) ubx_measurement: Option<TUbxOdo>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) std_mps: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -57,12 +68,50 @@ pub(super) struct TOdometer {
 pub(super) fn convert(o: &TOdometer, base: &Path) -> KResult<(OdometerSource, OdometerOptions)> {
     let d = OdometerOptions::default();
     let path = file_key(base, "odometer.file", &o.file)?;
+    if o.format == TOdoFormat::Ubx && o.skip_lines.is_some() {
+        return Err(kerr(
+            "odometer.skip_lines",
+            "applies only to text files, not to odometer.format = \"ubx\"",
+        ));
+    }
+    if o.format != TOdoFormat::Ubx && o.ubx_measurement.is_some() {
+        return Err(kerr(
+            "odometer.ubx_measurement",
+            "applies only to odometer.format = \"ubx\"",
+        ));
+    }
     let format = match o.format {
+        TOdoFormat::Ubx => {
+            if o.speed_is_mean.is_some() {
+                return Err(kerr(
+                    "odometer.speed_is_mean",
+                    "applies only to odometer.format = \"speed\" (a UBX speed is instantaneous, wheel ticks give the mean over the interval)",
+                ));
+            }
+            match (o.ubx_measurement.unwrap_or(TUbxOdo::Ticks), o.meters_per_pulse) {
+                (TUbxOdo::Speed, Some(_)) => {
+                    return Err(kerr(
+                        "odometer.meters_per_pulse",
+                        "applies only to wheel ticks (odometer.ubx_measurement = \"ticks\"), not to the UBX speed",
+                    ))
+                }
+                (TUbxOdo::Speed, None) => OdometerFormat::Ubx(UbxOdometer::Speed),
+                (TUbxOdo::Ticks, None) => {
+                    return Err(kerr(
+                        "odometer.meters_per_pulse",
+                        "missing: the distance per wheel tick [m] is required for UBX wheel ticks (or set odometer.ubx_measurement = \"speed\")",
+                    ))
+                }
+                (TUbxOdo::Ticks, Some(k)) => OdometerFormat::Ubx(UbxOdometer::Ticks {
+                    meters_per_pulse: positive("odometer.meters_per_pulse", k)?,
+                }),
+            }
+        }
         TOdoFormat::Speed => {
             if o.meters_per_pulse.is_some() {
                 return Err(kerr(
                     "odometer.meters_per_pulse",
-                    "applies only to odometer.format = \"pulses\" or \"navfuse\"",
+                    "applies only to odometer.format = \"pulses\", \"navfuse\" or \"ubx\"",
                 ));
             }
             OdometerFormat::Speed {
@@ -147,8 +196,17 @@ pub(super) fn to_toml(
     w: &PathWriter,
 ) -> Option<TOdometer> {
     let src = src?;
+    let mut ubx_measurement = None;
     let (format, meters_per_pulse, speed_is_mean) = match src.format {
         OdometerFormat::Speed { speed_is_mean } => (TOdoFormat::Speed, None, Some(speed_is_mean)),
+        OdometerFormat::Ubx(UbxOdometer::Speed) => {
+            ubx_measurement = Some(TUbxOdo::Speed);
+            (TOdoFormat::Ubx, None, None)
+        }
+        OdometerFormat::Ubx(UbxOdometer::Ticks { meters_per_pulse }) => {
+            ubx_measurement = Some(TUbxOdo::Ticks);
+            (TOdoFormat::Ubx, Some(meters_per_pulse), None)
+        }
         OdometerFormat::Pulses { meters_per_pulse } => {
             (TOdoFormat::Pulses, Some(meters_per_pulse), None)
         }
@@ -162,6 +220,7 @@ pub(super) fn to_toml(
         meters_per_pulse,
         speed_is_mean,
         skip_lines: src.skip_lines,
+        ubx_measurement,
         std_mps: Some(od.std_mps),
         scale_ppm: Some(PPM.user(od.scale_initial)),
         scale_std_ppm: Some(PPM.user(od.scale_std)),

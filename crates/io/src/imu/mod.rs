@@ -118,6 +118,7 @@ pub fn open_imu(src: &ImuSource) -> Result<ImuReader, InputError> {
         _ => LineReader::open(path)?,
     };
     let mut ulog_warnings = Vec::new();
+    let mut source_note = None;
     let nominal_dt = 1.0 / rate_hz;
     let mut gps_week = None;
     let (kind, quantity, sampling) = match &src.format {
@@ -198,6 +199,21 @@ pub fn open_imu(src: &ImuSource) -> Result<ImuReader, InputError> {
             let kind = Kind::Ulog(imu.samples.into_iter());
             (kind, ImuQuantity::Rate, imu.sampling)
         }
+        ImuFormat::Ubx => {
+            // ESF samples are instantaneous sensor readings: the trapezoid rule.
+            let log = crate::ubx::read_ubx(path)?;
+            let (mut raw, note) = crate::ubx::aiding::imu_rates(path, &log, &mut ulog_warnings)?;
+            ulog_warnings.extend(log.warnings.iter().cloned());
+            source_note = Some(note);
+            gps_week = log.fix_week.and_then(|w| u32::try_from(w).ok());
+            raw.iter_mut().for_each(|r| r.0 += src.time_offset_s);
+            // Kind::Ulog: any list of records, "line" numbers counting them.
+            (
+                Kind::Ulog(raw.into_iter()),
+                ImuQuantity::Rate,
+                RateSampling::Instant,
+            )
+        }
     };
     Ok(ImuReader {
         lines,
@@ -218,6 +234,7 @@ pub fn open_imu(src: &ImuSource) -> Result<ImuReader, InputError> {
             nominal_dt,
             gap_policy: src.gap_policy,
             warnings: ulog_warnings,
+            source_note,
             ..ImuReport::default()
         },
         done: false,

@@ -34,6 +34,9 @@ pub struct ImuReport {
     pub gap_policy: GapPolicy,
     /// Findings that did not stop the read: a damaged last line dropped, gaps bridged.
     pub warnings: Vec<String>,
+    /// What the source was read from, when more than the file (UBX: message kind and
+    /// time mapping).
+    pub source_note: Option<String>,
 }
 
 impl fmt::Display for ImuReport {
@@ -116,6 +119,9 @@ impl fmt::Display for ImuReport {
             }
         }
         f.write_str(".")?;
+        if let Some(n) = &self.source_note {
+            write!(f, " {n}.")?;
+        }
         for w in &self.warnings {
             write!(f, "\nwarning: {w}")?;
         }

@@ -1,15 +1,21 @@
 //! u-blox UBX binary logs (docs/FORMATS.md "u-blox UBX"): RXM-RAWX raw
 //! measurements as [`MultiObsEpoch`]s, RXM-SFRBX navigation pages as ephemerides
 //! of GPS, QZSS, Galileo, BeiDou and GLONASS (in a [`RinexNav`], so the GNSS layer
-//! takes them as it takes a RINEX navigation file), NAV-PVT as receiver fixes. Other messages are
+//! takes them as it takes a RINEX navigation file), NAV-PVT as receiver fixes,
+//! ESF-RAW / ESF-MEAS sensor data (esf.rs) and NAV-RELPOSNED headings
+//! (relposned.rs). Other messages are
 //! skipped and counted. Damage (bytes outside frames, checksum errors, malformed
 //! messages, a truncated last frame) never stops the read: it is counted and
 //! reported as warnings with byte offsets.
 
+pub mod aiding;
+pub mod esf;
 pub mod frame;
 pub mod pvt;
 pub mod rawx;
+pub mod relposned;
 pub mod sfrbx;
+pub mod synth;
 
 use crate::error::InputError;
 use crate::rinex_nav::RinexNav;
@@ -39,6 +45,10 @@ pub struct UbxLog {
     pub pvt_invalid: usize,
     /// Receiver GPS-UTC leap seconds (RAWX leapS, when flagged valid).
     pub leap_seconds: Option<i8>,
+    /// ESF-RAW / ESF-MEAS IMU samples, wheel ticks and speeds, with the time maps.
+    pub esf: esf::EsfLog,
+    /// Every well-formed NAV-RELPOSNED, in file order (`valid` says which are usable).
+    pub relpos: Vec<relposned::RelPosHeading>,
     pub rawx: rawx::RawxCounts,
     pub sfrbx: sfrbx::SfrbxCounts,
     /// Verified frames of other messages, by (class, id).
@@ -53,7 +63,7 @@ impl UbxLog {
     pub fn summary(&self) -> String {
         let other: usize = self.other_messages.values().sum();
         format!(
-            "{} RXM-RAWX epochs ({} measurements, {} of unknown signals), {} RXM-SFRBX ({}; taken/rejected: {}; {} not decoded) giving ephemerides G {} J {} E {} C {} R {}, {} NAV-PVT fixes ({} invalid), {} other messages, {} bytes outside frames, {} checksum errors",
+            "{} RXM-RAWX epochs ({} measurements, {} of unknown signals), {} RXM-SFRBX ({}; taken/rejected: {}; {} not decoded) giving ephemerides G {} J {} E {} C {} R {}, {} NAV-PVT fixes ({} invalid), {} ESF-RAW and {} ESF-MEAS IMU samples, {} ESF-MEAS wheel tick / speed values, {} NAV-RELPOSNED ({} valid), {} other messages, {} bytes outside frames, {} checksum errors",
             self.epochs.len(),
             self.rawx.measurements,
             self.rawx.unknown_signals,
@@ -72,6 +82,11 @@ impl UbxLog {
             self.nav.glonass.len(),
             self.fixes.len(),
             self.pvt_invalid,
+            self.esf.raw_imu.len(),
+            self.esf.meas_imu.len(),
+            self.esf.odo.len(),
+            self.relpos.len(),
+            self.relpos.iter().filter(|r| r.valid).count(),
             other,
             self.scan.skipped_bytes,
             self.scan.bad_checksums.len()
@@ -175,6 +190,9 @@ pub fn decode_ubx(data: &[u8], name: &str) -> UbxLog {
                     None => log.pvt_invalid += 1,
                 }
             }),
+            // ESF-RAW, ESF-MEAS: decoded with their time maps after this loop.
+            (0x10, 0x02) | (0x10, 0x03) => Ok(()),
+            (0x01, 0x3C) => relposned::decode(f).map(|r| log.relpos.push(r)),
             key => {
                 *log.other_messages.entry(key).or_default() += 1;
                 Ok(())
@@ -188,6 +206,7 @@ pub fn decode_ubx(data: &[u8], name: &str) -> UbxLog {
     log.fixes = fixes;
     log.fix_week = fix_week;
     log.pvt_invalid += dropped;
+    log.esf = esf::decode(&frames, name);
     log.leap_seconds = raw.leap_seconds;
     log.header.glonass_channels = raw.glonass_channels.clone();
     log.rawx = raw.counts.clone();
@@ -229,6 +248,7 @@ pub fn decode_ubx(data: &[u8], name: &str) -> UbxLog {
             n_mal - MAX_WARNINGS
         ));
     }
+    w.append(&mut log.esf.warnings);
     if let Some(off) = scan.truncated_at {
         w.push(format!(
             "{name}: byte {off}: last UBX frame truncated by the end of the file: dropped"
