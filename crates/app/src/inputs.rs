@@ -102,6 +102,9 @@ pub(crate) fn read(cfg: &RunConfig, job: &mut JobResult, warn: bool) -> Result<I
                 (None, Some(u)) => {
                     let log = navfuse_io::ubx::read_ubx(&src.path)?;
                     reader_warnings.extend(log.warnings.iter().cloned());
+                    // iTOW of the log's own week (RAWX, else the NAV-PVT date).
+                    let log_week = log.fix_week.and_then(|w| u32::try_from(w).ok());
+                    heading_week = log_week.or(gnss_week);
                     navfuse_io::ubx::aiding::headings(&src.path, &log, *u, &mut reader_warnings)?
                 }
                 (None, None) => {

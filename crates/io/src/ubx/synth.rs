@@ -136,7 +136,7 @@ pub fn nav_pvt_at(week: i32, itow_ms: u32) -> Vec<u8> {
     p[8] = (sod / 3600) as u8;
     p[9] = (sod / 60 % 60) as u8;
     p[10] = (sod % 60) as u8;
-    p[11] = 3; // validDate, validTime
+    p[11] = 7; // validDate, validTime, fullyResolved
     p[20] = 3; // 3D
     p[21] = 1; // gnssFixOK
     p[23] = 12;
