@@ -403,10 +403,9 @@ fn write_batches(
     failed.map_or(Ok(()), Err)
 }
 
-/// Write `events.log` (input notes, findings, the run's events, how it ended),
-/// `integrity.csv` (with the monitor) and `summary.json`, and list them in `job.files`.
-fn write_reports(out_dir: &Path, job: &mut JobResult, progress: bool) -> Result<(), Error> {
-    let ev_path = out_dir.join("events.log");
+/// The text of `events.log`: input notes and findings (`# ` lines), the run's events,
+/// and last how it ended when it did not complete.
+pub fn events_log_text(job: &JobResult) -> String {
     let mut text = String::new();
     for n in &job.notes {
         text.push_str(&format!("# input: {n}\n"));
@@ -421,7 +420,14 @@ fn write_reports(out_dir: &Path, job: &mut JobResult, progress: bool) -> Result<
     if let Some(e) = &job.error {
         text.push_str(&format!("# {}: {e}\n", job.status));
     }
-    let ev = std::fs::write(&ev_path, text)
+    text
+}
+
+/// Write `events.log` (input notes, findings, the run's events, how it ended),
+/// `integrity.csv` (with the monitor) and `summary.json`, and list them in `job.files`.
+fn write_reports(out_dir: &Path, job: &mut JobResult, progress: bool) -> Result<(), Error> {
+    let ev_path = out_dir.join("events.log");
+    let ev = std::fs::write(&ev_path, events_log_text(job))
         .map_err(|e| Error::io(format!("cannot write {}", ev_path.display()), e));
     if ev.is_ok() {
         job.files.push(ev_path);

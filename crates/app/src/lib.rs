@@ -28,7 +28,9 @@ pub mod gnss_input;
 mod inputs;
 mod job;
 mod navigate;
+mod overrides;
 pub mod plausibility;
+pub mod score;
 mod sink;
 mod smooth;
 pub mod spp;
@@ -39,10 +41,11 @@ pub mod ubx_input;
 
 pub use error::Error;
 pub use export::export_run;
-pub use file_sink::FileSink;
+pub use file_sink::{events_log_text, FileSink};
 pub use job::{run, run_job, run_job_opts, RunOptions};
 pub use navfuse_io::config::{self, RunConfig};
 pub use navfuse_io::nav::SolutionRecord;
+pub use overrides::RunOverrides;
 pub use sink::{
     MemorySink, OutputLayout, SmoothedEpoch, SmoothedLayout, SolutionSink, StateValues,
 };

@@ -2,11 +2,10 @@
 
 use anyhow::{bail, Context, Result};
 use nalgebra::Vector3;
-use navfuse_core::eval::{evaluate, EvalOptions, EvalReport, Stat};
+use navfuse_app::score::{errors_csv as errors_csv_text, report_json, score, ScoreOptions};
+use navfuse_core::eval::{EvalReport, Stat};
 use navfuse_core::outage::OutageSchedule;
-use navfuse_core::time::SECONDS_PER_WEEK as WEEK_S;
 use navfuse_io::trajectory::{detect_format, read_trajectory, TrajFormat, Trajectory};
-use serde_json::{json, Value};
 use std::path::Path;
 
 /// The two files and how to read them.
@@ -72,169 +71,44 @@ pub fn main(
     let (solution, truth) = (inputs.solution, inputs.truth);
     let quality = parse_quality(inputs.quality)?;
     let sol = load(solution, inputs.solution_format, "--solution-format", &[])?;
-    let mut reference = load_reference(truth, inputs.truth_format, &quality)?;
-    if sol.points.is_empty() {
-        bail!("{}: no solution epochs", solution.display());
-    }
-    if reference.points.is_empty() {
-        bail!("{}: no reference epochs", truth.display());
-    }
-    // Same week reference for both (a week of 0 means seconds of week only).
-    if sol.week != 0 && reference.week != 0 && sol.week != reference.week {
-        let shift = (reference.week as f64 - sol.week as f64) * WEEK_S;
-        reference.points.iter_mut().for_each(|p| p.t += shift);
-    }
-    if let Some(w) = window {
-        let (a, b) = w
-            .split_once(':')
-            .and_then(|(a, b)| Some((a.trim().parse::<f64>().ok()?, b.trim().parse::<f64>().ok()?)))
-            .with_context(|| format!("--window '{w}': expected START:END in seconds"))?;
-        reference.points.retain(|p| p.t >= a && p.t <= b);
-    }
-    let schedule = match &gaps {
-        Some(g) => OutageSchedule::parse(g).map_err(|e| anyhow::anyhow!("--gaps: {e}"))?,
-        None => OutageSchedule::default(),
+    let reference = load_reference(truth, inputs.truth_format, &quality)?;
+    let window = match window {
+        Some(w) => Some(
+            w.split_once(':')
+                .and_then(|(a, b)| {
+                    Some((a.trim().parse::<f64>().ok()?, b.trim().parse::<f64>().ok()?))
+                })
+                .with_context(|| format!("--window '{w}': expected START:END in seconds"))?,
+        ),
+        None => None,
     };
-    let (t0, t1) = (sol.points[0].t, sol.points[sol.points.len() - 1].t);
-    let opts = EvalOptions {
-        gaps: schedule.windows_in(t0, t1),
+    let opts = ScoreOptions {
+        gaps: gaps
+            .as_deref()
+            .map(OutageSchedule::parse)
+            .transpose()
+            .map_err(|e| anyhow::anyhow!("--gaps: {e}"))?,
         lever_arm_b: lever_arm.as_deref().map(parse_vec3).transpose()?,
+        window,
         keep_epochs: errors_csv.is_some(),
-        ..Default::default()
     };
-    if opts.lever_arm_b.is_some() && sol.points.iter().any(|p| p.rpy.is_none()) {
-        bail!(
-            "--lever-arm needs attitude in the solution, and {} ({}) has none",
-            solution.display(),
-            sol.format.describe()
-        );
-    }
-    let rep = evaluate(&sol.points, &reference.points, &opts);
-    if rep.epochs == 0 {
-        bail!(
-            "no reference epoch of {} falls inside the solution's time span {:.3} .. {:.3} (check the time tags and weeks)",
-            truth.display(), t0, t1
-        );
-    }
+    let rep = score(
+        &sol,
+        &solution.display().to_string(),
+        reference,
+        &truth.display().to_string(),
+        &opts,
+    )?;
     if let Some(p) = errors_csv {
-        write_errors(p, &rep)?;
+        std::fs::write(p, errors_csv_text(&rep))
+            .with_context(|| format!("cannot write {}", p.display()))?;
     }
     if json_out {
-        println!("{}", serde_json::to_string_pretty(&to_json(&rep))?);
+        println!("{}", serde_json::to_string_pretty(&report_json(&rep))?);
     } else {
         print!("{}", to_text(&rep));
     }
     Ok(())
-}
-
-/// `--errors FILE.csv`: one line per scored epoch (empty fields where a side lacks
-/// velocity or attitude, or the track is too slow for along/cross).
-fn write_errors(path: &Path, r: &EvalReport) -> Result<()> {
-    use std::fmt::Write as _;
-    let mut t = String::from(
-        "t_s,d_north_m,d_east_m,d_down_m,horizontal_m,along_m,cross_m,d_vn_mps,d_ve_mps,d_vd_mps,d_roll_deg,d_pitch_deg,d_yaw_deg,d_att_deg\n",
-    );
-    let opt = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:.6}"));
-    for e in &r.per_epoch {
-        let _ = write!(
-            t,
-            "{:.6},{:.6},{:.6},{:.6},{:.6},{},{},",
-            e.t,
-            e.pos_ned.x,
-            e.pos_ned.y,
-            e.pos_ned.z,
-            e.horizontal,
-            opt(e.along_cross.map(|a| a.0)),
-            opt(e.along_cross.map(|a| a.1)),
-        );
-        let v = e.vel_ned;
-        let a = e.att.map(|a| a.map(f64::to_degrees));
-        let _ = writeln!(
-            t,
-            "{},{},{},{},{},{},{}",
-            opt(v.map(|v| v.x)),
-            opt(v.map(|v| v.y)),
-            opt(v.map(|v| v.z)),
-            opt(a.map(|a| a.x)),
-            opt(a.map(|a| a.y)),
-            opt(a.map(|a| a.z)),
-            opt(a.map(|a| a.norm())),
-        );
-    }
-    std::fs::write(path, t).with_context(|| format!("cannot write {}", path.display()))
-}
-
-fn stat_json(s: &Stat, scale: f64) -> Value {
-    json!({ "rms": s.rms * scale, "max": s.max * scale, "mean": s.mean * scale })
-}
-
-pub fn to_json(r: &EvalReport) -> Value {
-    let d = 180.0 / std::f64::consts::PI;
-    let mut v = json!({
-        "epochs": r.epochs,
-        "skipped": r.skipped,
-        "t_first": r.t_first,
-        "t_last": r.t_last,
-        "position_m": {
-            "north": stat_json(&r.north, 1.0),
-            "east": stat_json(&r.east, 1.0),
-            "down": stat_json(&r.down, 1.0),
-            "horizontal": stat_json(&r.horizontal, 1.0),
-            "vertical": stat_json(&r.vertical, 1.0),
-            "3d": stat_json(&r.pos_3d, 1.0),
-        },
-        "percentiles_m": {
-            "horizontal": { "p50": r.horizontal_pct[0], "p68": r.horizontal_pct[1], "p95": r.horizontal_pct[2], "p99": r.horizontal_pct[3] },
-            "3d": { "p50": r.pos_3d_pct[0], "p68": r.pos_3d_pct[1], "p95": r.pos_3d_pct[2], "p99": r.pos_3d_pct[3] },
-            "cep": r.horizontal_pct[0],
-            "r95": r.horizontal_pct[2],
-        },
-    });
-    if let Some([a, c]) = &r.along_cross {
-        v["position_m"]["along_track"] = stat_json(a, 1.0);
-        v["position_m"]["cross_track"] = stat_json(c, 1.0);
-    }
-    if let Some(vel) = &r.vel {
-        v["velocity_mps"] = json!({
-            "north": stat_json(&vel[0], 1.0), "east": stat_json(&vel[1], 1.0),
-            "down": stat_json(&vel[2], 1.0), "3d": stat_json(&vel[3], 1.0),
-        });
-    }
-    if let Some(a) = &r.att {
-        v["attitude_deg"] = json!({
-            "roll": stat_json(&a[0], d), "pitch": stat_json(&a[1], d), "yaw": stat_json(&a[2], d),
-            "total": r.att_total.as_ref().map(|t| stat_json(t, d)),
-        });
-    }
-    if !r.gaps.is_empty() {
-        v["gaps"] = Value::Array(
-            r.gaps
-                .iter()
-                .map(|g| {
-                    let mut j = json!({
-                        "start": g.start, "end": g.end, "epochs": g.epochs,
-                        "max_horizontal_m": g.max_horizontal, "max_vertical_m": g.max_vertical,
-                        "max_3d_m": g.max_3d,
-                    });
-                    if r.att.is_some() {
-                        j["max_roll_deg"] = json!(g.max_roll * d);
-                        j["max_pitch_deg"] = json!(g.max_pitch * d);
-                        j["max_yaw_deg"] = json!(g.max_yaw * d);
-                    }
-                    j
-                })
-                .collect(),
-        );
-    }
-    if let Some(g) = &r.gap_rms {
-        v["gap_max_rms"] = json!({ "horizontal_m": g[0], "vertical_m": g[1], "3d_m": g[2] });
-        if r.att.is_some() {
-            v["gap_max_rms"]["roll_deg"] = json!(g[3] * d);
-            v["gap_max_rms"]["pitch_deg"] = json!(g[4] * d);
-            v["gap_max_rms"]["yaw_deg"] = json!(g[5] * d);
-        }
-    }
-    v
 }
 
 pub fn to_text(r: &EvalReport) -> String {

@@ -4,8 +4,6 @@
 
 use anyhow::{Context, Result};
 use navfuse_app::{config, FileSink, RunOptions, StopFlag};
-use navfuse_core::outage::OutageSchedule;
-use navfuse_io::input::SmootherMode;
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
@@ -30,28 +28,13 @@ pub fn main(
     for w in &cfg.warnings {
         eprintln!("navfuse: warning: {w}");
     }
-    if let Some(spec) = outages {
-        let extra = OutageSchedule::parse(&spec).map_err(|e| anyhow::anyhow!("--outages: {e}"))?;
-        cfg.nav.gnss.outages.windows.extend(extra.windows);
-        cfg.nav.gnss.outages.periodic.extend(extra.periodic);
+    navfuse_app::RunOverrides {
+        outages,
+        smooth,
+        smooth_mode,
+        formats,
     }
-    if let Some(list) = formats {
-        let extra = navfuse_io::export::ExportFormat::parse_list(&list)
-            .map_err(|e| anyhow::anyhow!("--formats: {e}"))?;
-        for f in extra {
-            if !cfg.output.formats.contains(&f) {
-                cfg.output.formats.push(f);
-            }
-        }
-    }
-    if smooth || smooth_mode.is_some() {
-        cfg.smoother.enabled = true;
-    }
-    match smooth_mode.as_deref() {
-        Some("rts") => cfg.smoother.mode = SmootherMode::Rts,
-        Some("combined") => cfg.smoother.mode = SmootherMode::Combined,
-        _ => {}
-    }
+    .apply(&mut cfg)?;
     let out_dir = out
         .or_else(|| cfg.kfgins_output_path.clone())
         .unwrap_or_else(|| PathBuf::from("out"));

@@ -514,6 +514,26 @@ pub fn push_fixed9(out: &mut Vec<u8>, v: f64) {
     }
 }
 
+/// The number a reader gets back from [`push_fixed9`]'s text of `v`: `v` rounded to 9
+/// decimals, as the nearest f64 (what a correctly rounding parser returns), without
+/// formatting it. navfuse's Python frames hold these values, so that they equal the
+/// files (`solution.csv`) exactly.
+pub fn fixed9_value(v: f64) -> f64 {
+    match round_1e9(v.abs()) {
+        // n < 4e15 is exact in f64 and IEEE division rounds correctly: n / 1e9 is the
+        // nearest f64 to the decimal n * 10^-9.
+        Some(n) => {
+            let q = n as f64 / 1e9;
+            if v.is_sign_negative() {
+                -q
+            } else {
+                q
+            }
+        }
+        None => format!("{v:.9}").parse().unwrap_or(v),
+    }
+}
+
 /// Append one field as C `"%-15.9lf "`: 9 decimals, left-justified in 15 characters,
 /// then one space (KF-GINS output files).
 #[inline]
@@ -539,21 +559,7 @@ pub fn push_kf_field(out: &mut Vec<u8>, v: f64) {
 /// 0 and returns the length (at most 18), or None when `write!` must be used.
 #[inline(always)]
 fn fixed9_fast(v: f64, buf: &mut [u8]) -> Option<usize> {
-    let a = v.abs();
-    if a.is_nan() || a >= 4.0e6 {
-        return None;
-    }
-    // Quick path: x = a * 1e9 < 4e15 < 2^52 is within ulp(x)/2 <= x * 2^-53 of the
-    // exact product, so rounding x gives the right integer unless x's fraction is
-    // that close to one half.
-    let x = a * 1e9;
-    let t = x as i64; // truncation = floor for 0 <= x < 2^52
-    let f = x - t as f64; // exact
-    let n = if (f - 0.5).abs() > x * 1.2e-16 {
-        (t + i64::from(f > 0.5)) as u64
-    } else {
-        round_1e9_exact(a)?
-    };
+    let n = round_1e9(v.abs())?;
     // n < 4e15: 7 integer digits and 9 fraction digits. `hi` holds the integer
     // digits and the first fraction digit, `lo` the other 8 fraction digits.
     let hi = (n / 100_000_000) as u32; // <= 4e7
@@ -579,6 +585,26 @@ fn fixed9_fast(v: f64, buf: &mut [u8]) -> Option<usize> {
     buf.get_mut(pos + ndig + 2..pos + ndig + 10)?
         .copy_from_slice(&(swar8(lo) | 0x3030_3030_3030_3030).to_le_bytes());
     Some(pos + ndig + 10)
+}
+
+/// a * 1e9 rounded to the nearest integer, for 0 <= a < 4e6 (None: NaN, too large or
+/// an exact decimal tie).
+#[inline(always)]
+fn round_1e9(a: f64) -> Option<u64> {
+    if a.is_nan() || a >= 4.0e6 {
+        return None;
+    }
+    // Quick path: x = a * 1e9 < 4e15 < 2^52 is within ulp(x)/2 <= x * 2^-53 of the
+    // exact product, so rounding x gives the right integer unless x's fraction is
+    // that close to one half.
+    let x = a * 1e9;
+    let t = x as i64; // truncation = floor for 0 <= x < 2^52
+    let f = x - t as f64; // exact
+    if (f - 0.5).abs() > x * 1.2e-16 {
+        Some((t + i64::from(f > 0.5)) as u64)
+    } else {
+        round_1e9_exact(a)
+    }
 }
 
 /// Round a * 1e9 (0 <= a < 4e6) to the nearest integer exactly: a = m 2^e with
@@ -622,6 +648,29 @@ fn swar8(n: u32) -> u64 {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn fixed9_value_is_the_parsed_text() {
+        let mut x = 0x9E37_79B9_7F4A_7C15u64;
+        let mut line = Vec::new();
+        for k in 0..200_000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            // Magnitudes from 1e-12 to 1e8, both signs, and some exact ties.
+            let m = (x >> 11) as f64 / (1u64 << 53) as f64;
+            let v = match k % 4 {
+                0 => (m - 0.5) * 10f64.powi((k % 21) as i32 - 12),
+                1 => ((x % 2_000_001) as f64 - 1e6) * 0.5e-9,
+                2 => m * 7e5,
+                _ => -m * 3e7,
+            };
+            line.clear();
+            push_fixed9(&mut line, v);
+            let parsed: f64 = std::str::from_utf8(&line).unwrap().parse().unwrap();
+            assert_eq!(fixed9_value(v).to_bits(), parsed.to_bits(), "{v:e}");
+        }
+    }
+
     use super::*;
 
     fn fixed(v: f64) -> String {

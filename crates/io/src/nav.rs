@@ -46,7 +46,7 @@ pub struct SolutionRecord {
 
 /// The 11 `.nav` values: week, t, lat \[deg\], lon \[deg\], h \[m\], vN vE vD [m/s],
 /// roll pitch yaw \[deg\] with yaw in [0, 360) (also after rounding to 9 decimals).
-pub(crate) fn nav_fields(r: &SolutionRecord) -> [f64; 11] {
+pub fn nav_fields(r: &SolutionRecord) -> [f64; 11] {
     let n = &r.nav;
     let rpy = euler_from_q_bn(&n.q_bn);
     let mut yaw = wrap_2pi(rpy.z).to_degrees();
@@ -71,7 +71,7 @@ pub(crate) fn nav_fields(r: &SolutionRecord) -> [f64; 11] {
 
 /// The 12 IMU error values in KF-GINS units: gyro bias [deg/h], accel bias \[mGal\],
 /// gyro scale \[ppm\], accel scale \[ppm\], x y z each.
-pub(crate) fn imu_err_fields(e: &ImuErrors) -> [f64; 12] {
+pub fn imu_err_fields(e: &ImuErrors) -> [f64; 12] {
     let g = e.gyro_bias * RADPS_TO_DEGPH;
     let a = e.accel_bias * MPS2_TO_MGAL;
     let sg = e.gyro_scale * TO_PPM;
@@ -83,7 +83,7 @@ pub(crate) fn imu_err_fields(e: &ImuErrors) -> [f64; 12] {
 
 /// The 21 std values in KF-GINS units: pos \[m\], vel [m/s], att \[deg\], gyro bias
 /// [deg/h], accel bias \[mGal\], gyro scale \[ppm\], accel scale \[ppm\].
-pub(crate) fn std_fields(std: &[f64; 21]) -> [f64; 21] {
+pub fn std_fields(std: &[f64; 21]) -> [f64; 21] {
     let mut out = *std;
     for (k, v) in out.iter_mut().enumerate() {
         *v *= match k {

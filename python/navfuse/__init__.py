@@ -1,0 +1,320 @@
+"""navfuse from Python: GNSS/INS integrated navigation returning pandas DataFrames.
+
+    import navfuse
+    res = navfuse.run("examples/demo/drive_excerpt.toml")
+    res.solution          # DataFrame, the columns of solution.csv (lat_deg, vn_mps, yaw_deg, std_*, state)
+    res.summary["status"] # summary.json as a dict
+    ev = navfuse.evaluate(res, "examples/demo/gnss.pos", lever_arm=(0, -0.05, 0))
+    ev.stats["position_m"]["horizontal"]["rms"]
+
+The work is done by the same Rust library as the ``navfuse`` command (``navfuse run``,
+``navfuse sim``, ``navfuse eval``), with the GIL released. Column names carry their
+units; see docs/PYTHON.md for every table.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import pandas as pd
+
+from . import _navfuse
+from ._errors import InputError, NavfuseError, RunError
+from ._toml import dumps as _toml_dumps
+
+__version__ = _navfuse.__version__
+
+__all__ = [
+    "run", "simulate", "evaluate", "read_imu", "read_gnss", "read_rinex_obs",
+    "read_nav", "read_trajectory", "RunResult", "SimResult", "EvalResult",
+    "NavfuseError", "InputError", "RunError", "Interrupted",
+]
+
+Interrupted = _navfuse._Interrupted
+
+ConfigLike = Union[str, "os.PathLike[str]", Mapping[str, Any]]
+
+
+def _frame(cols: Optional[Dict[str, Any]]) -> Optional[pd.DataFrame]:
+    if cols is None:
+        return None
+    return pd.DataFrame(cols)
+
+
+def _config_arg(config: ConfigLike, base_dir: Union[str, "os.PathLike[str]", None],
+                kf_gins: bool = False) -> Tuple[str, str, str]:
+    """(kind, value, base_dir) for the extension: a path, TOML text or a dict."""
+    base = os.fspath(base_dir) if base_dir is not None else os.getcwd()
+    if isinstance(config, Mapping):
+        return "toml", _toml_dumps(dict(config)), base
+    if isinstance(config, os.PathLike):
+        return "path", os.fspath(config), base
+    if not isinstance(config, str):
+        raise TypeError(f"config: expected a path, TOML text or a dict, found {type(config).__name__}")
+    looks_like_text = "\n" in config or ("=" in config and not os.path.exists(config))
+    if looks_like_text:
+        return ("yaml" if kf_gins else "toml"), config, base
+    return "path", config, base
+
+
+@dataclass
+class RunResult:
+    """What ``navfuse.run`` returns.
+
+    solution:        one row per output epoch, the columns of ``solution.csv`` with its
+                     values (9 decimals): gps_week, t_s, lat_deg, lon_deg, h_m, vn_mps,
+                     ve_mps, vd_mps, roll_deg, pitch_deg, yaw_deg, the std_* columns
+                     (with [output] std), gnss_integrity (with the monitor), state.
+    imu_errors:      imu_err.txt as columns: gps_week, t_s, gyro bias b*_degph, accel
+                     bias ba*_mgal, scale factors s*_ppm.
+    states:          states.csv (extra filter states and their sd_*), or None.
+    smoothed:        smoothed.csv when smoothing ran, else None.
+    smoothed_states: smoothed_states.csv, or None.
+    summary:         summary.json as a dict (status, counts, time offset, files, ...).
+    events:          the lines of events.log.
+    out:             the folder the files were written to (``out=``), or None.
+    warnings:        the configuration's warnings (e.g. unknown KF-GINS keys).
+    """
+
+    solution: pd.DataFrame
+    imu_errors: pd.DataFrame
+    states: Optional[pd.DataFrame]
+    smoothed: Optional[pd.DataFrame]
+    smoothed_states: Optional[pd.DataFrame]
+    summary: Dict[str, Any]
+    events: List[str]
+    out: Optional[Path]
+    warnings: List[str] = field(default_factory=list)
+
+    @property
+    def status(self) -> str:
+        return str(self.summary.get("status", ""))
+
+
+def _run_result(d: Dict[str, Any], out: Optional[Path], warnings: List[str]) -> RunResult:
+    empty = pd.DataFrame()
+    return RunResult(
+        solution=_frame(d["solution"]) if d["solution"] is not None else empty,
+        imu_errors=_frame(d["imu_errors"]) if d["imu_errors"] is not None else empty,
+        states=_frame(d["states"]),
+        smoothed=_frame(d["smoothed"]),
+        smoothed_states=_frame(d["smoothed_states"]),
+        summary=json.loads(d["summary_json"]) if d["summary_json"] else {},
+        events=d["events_log"].splitlines(),
+        out=out,
+        warnings=list(warnings),
+    )
+
+
+def run(config: ConfigLike, *, out: Union[str, "os.PathLike[str]", None] = None,
+        outages: Optional[str] = None, smooth: bool = False, smooth_mode: Optional[str] = None,
+        formats: Optional[str] = None, kf_gins: bool = False,
+        base_dir: Union[str, "os.PathLike[str]", None] = None) -> RunResult:
+    """Navigate, as ``navfuse run CONFIG`` does.
+
+    config:   a path (navfuse .toml or KF-GINS .yaml), TOML text, or a dict of the TOML
+              sections (``{"imu": {...}, "gnss": {...}}``); relative paths in text or a
+              dict resolve against ``base_dir`` (default: the current directory).
+    out:      also write the files of ``navfuse run --out OUT``.
+    outages, smooth, smooth_mode, formats: as ``--outages``, ``--smooth``,
+              ``--smooth-mode``, ``--formats``.
+    kf_gins:  ``config`` is KF-GINS YAML text.
+
+    Raises InputError (file, line, field) for bad inputs, RunError when the run failed
+    (``e.result``: what was computed before), KeyboardInterrupt on Ctrl-C (the run stops
+    cleanly; ``e.result`` as well).
+    """
+    kind, value, base = _config_arg(config, base_dir, kf_gins)
+    out_s = os.fspath(out) if out is not None else None
+    try:
+        d, _note, warnings = _navfuse.run(kind, value, base, out_s, outages, bool(smooth),
+                                          smooth_mode, formats)
+    except (RunError, InputError) as e:
+        if e.partial is not None:
+            e.result = _run_result(e.partial, Path(out_s) if out_s else None, [])
+        raise
+    except KeyboardInterrupt as e:
+        partial = getattr(e, "result", None)
+        if isinstance(partial, dict):
+            e.result = _run_result(partial, Path(out_s) if out_s else None, [])
+        raise
+    return _run_result(d, Path(out_s) if out_s else None, warnings)
+
+
+class SimResult:
+    """What ``navfuse.simulate`` returns: the folder of ``navfuse sim`` and its tables,
+    read when first used.
+
+    dir, summary (sim_summary.json), run_config (the run.toml to navigate on it),
+    truth (truth.nav: gps_week, t_s, lat_deg, ..., yaw_deg at the IMU rate),
+    imu (t_s, dt_s, dtheta_*_rad, dvel_*_mps, as navfuse run reads it), gnss (the fixes,
+    or for raw-measurement scenarios the single point fixes), events (events.csv),
+    gnss_errors (gnss_errors.csv, when written). Without ``out=`` the folder is a
+    temporary one, removed with this object.
+    """
+
+    def __init__(self, directory: Path, summary: Dict[str, Any],
+                 tmp: Optional[tempfile.TemporaryDirectory] = None) -> None:
+        self.dir = directory
+        self.summary = summary
+        self._tmp = tmp
+
+    @property
+    def run_config(self) -> Path:
+        return self.dir / "run.toml"
+
+    @cached_property
+    def truth(self) -> pd.DataFrame:
+        return read_nav(self.dir / "truth.nav")
+
+    @cached_property
+    def imu(self) -> pd.DataFrame:
+        return read_imu(self.run_config)
+
+    @cached_property
+    def gnss(self) -> Optional[pd.DataFrame]:
+        try:
+            return read_gnss(self.run_config)
+        except ValueError as e:
+            if "no [gnss] section" in str(e):
+                return None
+            raise
+
+    def _csv(self, name: str) -> Optional[pd.DataFrame]:
+        p = self.dir / name
+        return pd.read_csv(p) if p.exists() else None
+
+    @cached_property
+    def events(self) -> Optional[pd.DataFrame]:
+        return self._csv("events.csv")
+
+    @cached_property
+    def gnss_errors(self) -> Optional[pd.DataFrame]:
+        return self._csv("gnss_errors.csv")
+
+    def __repr__(self) -> str:
+        return f"SimResult(dir={str(self.dir)!r}, files={self.summary.get('files')})"
+
+
+def simulate(scenario: Union[str, "os.PathLike[str]"], *, seed: Optional[int] = None,
+             out: Union[str, "os.PathLike[str]", None] = None,
+             base_dir: Union[str, "os.PathLike[str]", None] = None) -> SimResult:
+    """Simulate a scenario (a path, or scenario TOML text), as ``navfuse sim``.
+
+    seed: the random seed in place of the scenario's. out: the folder (default: a
+    temporary one, kept as long as the result is).
+    """
+    kind, value, base = _config_arg(scenario, base_dir)
+    tmp = None
+    if out is None:
+        tmp = tempfile.TemporaryDirectory(prefix="navfuse-sim-")
+        out = tmp.name
+    summary = _navfuse.simulate(kind, value, base, os.fspath(out), seed)
+    return SimResult(Path(out), json.loads(summary), tmp)
+
+
+@dataclass
+class EvalResult:
+    """What ``navfuse.evaluate`` returns: ``stats`` as ``navfuse eval --json`` prints
+    it, ``errors`` as ``--errors`` writes it (full precision; NaN where a side lacks
+    velocity or attitude)."""
+
+    stats: Dict[str, Any]
+    errors: pd.DataFrame
+
+    def rms(self, what: str = "horizontal") -> float:
+        """RMS of a position error: north, east, down, horizontal, vertical, 3d [m]."""
+        return float(self.stats["position_m"][what]["rms"])
+
+
+def _traj_arg(x: Any) -> Any:
+    if isinstance(x, RunResult):
+        x = x.solution
+    elif isinstance(x, SimResult):
+        x = x.truth
+    if isinstance(x, pd.DataFrame):
+        cols = {c: np.ascontiguousarray(x[c].to_numpy(dtype=np.float64))
+                for c in ("t_s", "lat_deg", "lon_deg", "h_m", "vn_mps", "ve_mps", "vd_mps",
+                          "roll_deg", "pitch_deg", "yaw_deg") if c in x.columns}
+        if "gps_week" in x.columns and len(x) > 0:
+            cols["__week__"] = int(x["gps_week"].iloc[0])
+        return cols
+    return os.fspath(x)
+
+
+def evaluate(solution: Any, truth: Any, *, gaps: Optional[str] = None,
+             lever_arm: Optional[Sequence[float]] = None,
+             window: Optional[Tuple[float, float]] = None, solution_format: str = "auto",
+             truth_format: str = "auto", quality: Sequence[int] = (1,)) -> EvalResult:
+    """Score a solution against a reference, as ``navfuse eval SOLUTION TRUTH``.
+
+    Either side: a path (any format navfuse eval reads, recognised by content), a
+    RunResult (its solution), a SimResult (its truth) or a DataFrame with t_s, lat_deg,
+    lon_deg, h_m (optionally gps_week, vn/ve/vd_mps, roll/pitch/yaw_deg).
+    gaps, lever_arm, window, quality: as --gaps, --lever-arm, --window, --quality.
+    """
+    la = None if lever_arm is None else [float(v) for v in lever_arm]
+    w = None if window is None else (float(window[0]), float(window[1]))
+    stats, errors = _navfuse.evaluate(_traj_arg(solution), _traj_arg(truth), gaps, la, w,
+                                      solution_format, truth_format, list(quality))
+    return EvalResult(json.loads(stats), pd.DataFrame(errors))
+
+
+def read_trajectory(path: Union[str, "os.PathLike[str]"], format: str = "auto",
+                    quality: Sequence[int] = (1,)) -> pd.DataFrame:
+    """Any trajectory navfuse eval reads (.nav, solution.csv, RTKLIB .pos, KF-GINS GNSS
+    text, PX4 ULog), its format recognised by content unless named: gps_week, t_s,
+    lat_deg, lon_deg, h_m and, when the file has them, vn/ve/vd_mps, roll/pitch/yaw_deg."""
+    cols, fmt, warnings = _navfuse.read_trajectory(os.fspath(path), format, list(quality))
+    df = pd.DataFrame(cols)
+    df.attrs["format"] = fmt
+    df.attrs["warnings"] = warnings
+    return df
+
+
+def read_nav(path: Union[str, "os.PathLike[str]"]) -> pd.DataFrame:
+    """A KF-GINS-style ``.nav`` file (solution.nav, truth.nav)."""
+    return read_trajectory(path, "nav")
+
+
+def read_imu(config: ConfigLike, *, base_dir: Union[str, "os.PathLike[str]", None] = None,
+             kf_gins: bool = False) -> pd.DataFrame:
+    """The IMU of a configuration's ``[imu]`` section, read as navfuse run reads it
+    (format, units, axes, time offset): t_s, dt_s, dtheta_{x,y,z}_rad, dvel_{x,y,z}_mps
+    (increments over each interval ending at t_s). ``df.attrs["gps_week"]``: the week."""
+    kind, value, base = _config_arg(config, base_dir, kf_gins)
+    cols, week = _navfuse.read_imu(kind, value, base)
+    df = pd.DataFrame(cols)
+    df.attrs["gps_week"] = week
+    return df
+
+
+def read_gnss(config: ConfigLike, *, base_dir: Union[str, "os.PathLike[str]", None] = None,
+              kf_gins: bool = False) -> pd.DataFrame:
+    """The GNSS fixes of a configuration's ``[gnss]`` section (KF-GINS text, .pos, NMEA,
+    CSV, ULog, UBX; RINEX and UBX raw: the single point fixes), as navfuse run reads them:
+    t_s, lat_deg, lon_deg, h_m, std_{n,e,d}_m, v{n,e,d}_mps, std_v{n,e,d}_mps (NaN
+    without velocity)."""
+    kind, value, base = _config_arg(config, base_dir, kf_gins)
+    cols, week, warnings = _navfuse.read_gnss(kind, value, base)
+    df = pd.DataFrame(cols)
+    df.attrs["gps_week"] = week
+    df.attrs["warnings"] = warnings
+    return df
+
+
+def read_rinex_obs(path: Union[str, "os.PathLike[str]"]) -> pd.DataFrame:
+    """Every observation of a RINEX 2/3/4 observation file (plain, .gz, Hatanaka), one
+    row per epoch, satellite and code: gps_week, t_s, flag, sat (G05), code (C1C),
+    value, lli, ssi."""
+    cols, warnings = _navfuse.read_rinex_obs(os.fspath(path))
+    df = pd.DataFrame(cols)
+    df.attrs["warnings"] = warnings
+    return df

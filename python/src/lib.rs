@@ -1,0 +1,185 @@
+//! `navfuse._navfuse`: the Rust side of the Python package. Every function takes
+//! plain values (paths, TOML text, arrays) and returns dicts of columns; the Python
+//! side (`navfuse/__init__.py`) makes the DataFrames and the result objects. Runs
+//! release the GIL; errors become `navfuse.InputError` (with `file`, `line`, `field`)
+//! or `navfuse.NavfuseError`.
+
+mod collect;
+mod errors;
+mod frame;
+mod readers;
+
+use collect::{CollectSink, Collected};
+use errors::{to_py_err, to_py_err_any, Interrupted};
+use frame::Frame;
+use navfuse_app::{FileSink, RunOptions, RunOverrides, StopFlag};
+use navfuse_io::config::{self, RunConfig};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+/// Read a configuration: `kind` "path" (a .toml or KF-GINS .yaml file), "toml" or
+/// "yaml" (text; relative paths against `base_dir`, which names it in errors).
+fn load_config(kind: &str, value: &str, base_dir: &Path) -> Result<RunConfig, navfuse_app::Error> {
+    let named = |ext: &str| base_dir.join(format!("<config {ext}>"));
+    Ok(match kind {
+        "path" => config::load(Path::new(value))?,
+        "toml" => config::parse_toml_str(value, &named("text"))?,
+        "yaml" => config::parse_kfgins_yaml_str(value, &named("yaml"))?,
+        k => {
+            return Err(navfuse_app::Error::Other(format!(
+                "unknown config kind '{k}'"
+            )))
+        }
+    })
+}
+
+/// Run `f` without the GIL on a thread of its own, checking Python's signals every
+/// 50 ms: Ctrl-C sets `stop` (the run ends cleanly, its output kept) and is raised
+/// once the run has ended.
+fn detached<T: Send>(
+    py: Python<'_>,
+    stop: &StopFlag,
+    f: impl FnOnce() -> T + Send,
+) -> PyResult<(T, Option<PyErr>)> {
+    std::thread::scope(|s| {
+        let h = s.spawn(f);
+        let mut signal: Option<PyErr> = None;
+        while !h.is_finished() {
+            py.detach(|| std::thread::sleep(Duration::from_millis(50)));
+            if signal.is_none() {
+                if let Err(e) = py.check_signals() {
+                    stop.atomic().store(2, std::sync::atomic::Ordering::SeqCst);
+                    signal = Some(e);
+                }
+            }
+        }
+        match h.join() {
+            Ok(v) => Ok((v, signal)),
+            Err(_) => Err(errors::NavfuseError::new_err(
+                "navfuse: the run panicked (a bug: please report it with the configuration)",
+            )),
+        }
+    })
+}
+
+/// Everything a run returns to Python.
+fn collected_to_py(py: Python<'_>, c: Collected) -> PyResult<Py<PyDict>> {
+    let d = PyDict::new(py);
+    let frame =
+        |f: Option<Frame>| -> PyResult<Option<Py<PyDict>>> { f.map(|f| f.into_py(py)).transpose() };
+    d.set_item("solution", frame(c.solution.map(|s| s.frame))?)?;
+    d.set_item("imu_errors", frame(c.imu_errors.map(|s| s.frame))?)?;
+    d.set_item("states", frame(c.states.map(|s| s.frame))?)?;
+    d.set_item("smoothed", frame(c.smoothed.map(|s| s.frame))?)?;
+    d.set_item(
+        "smoothed_states",
+        frame(c.smoothed_states.map(|s| s.frame))?,
+    )?;
+    d.set_item("summary_json", c.summary_json)?;
+    d.set_item("events_log", c.events_log)?;
+    Ok(d.unbind())
+}
+
+/// `navfuse.run`: see navfuse/__init__.py.
+#[pyfunction]
+#[pyo3(signature = (kind, value, base_dir, out=None, outages=None, smooth=false, smooth_mode=None, formats=None))]
+#[allow(clippy::too_many_arguments)]
+fn run(
+    py: Python<'_>,
+    kind: &str,
+    value: &str,
+    base_dir: PathBuf,
+    out: Option<PathBuf>,
+    outages: Option<String>,
+    smooth: bool,
+    smooth_mode: Option<String>,
+    formats: Option<String>,
+) -> PyResult<(Py<PyDict>, Option<String>, Vec<String>)> {
+    let stop = StopFlag::new();
+    let stop_run = stop.clone();
+    let work = move || -> Result<(Collected, Option<String>, Vec<String>), (navfuse_app::Error, Option<Collected>)> {
+        let mut cfg = load_config(kind, value, &base_dir).map_err(|e| (e, None))?;
+        let warnings = cfg.warnings.clone();
+        RunOverrides { outages, smooth, smooth_mode, formats }
+            .apply(&mut cfg)
+            .map_err(|e| (e, None))?;
+        let files = match &out {
+            Some(dir) => Some(FileSink::create(dir).map_err(|e| (e, None))?),
+            None => None,
+        };
+        let mut sink = CollectSink { files, out: Collected::default() };
+        let opts = RunOptions { stop: Some(stop_run), ..Default::default() };
+        match navfuse_app::run(cfg, &mut sink, &opts) {
+            Ok(job) => Ok((sink.out, job.error.clone(), warnings)),
+            Err(e) => Err((e, Some(sink.out))),
+        }
+    };
+    let (r, signal) = detached(py, &stop, work)?;
+    match r {
+        Ok((c, note, warnings)) => {
+            if let Some(sig) = signal {
+                return Err(sig);
+            }
+            Ok((collected_to_py(py, c)?, note, warnings))
+        }
+        Err((e, partial)) => {
+            let partial = partial.map(|c| collected_to_py(py, c)).transpose()?;
+            if e.interrupted().is_some() {
+                if let Some(sig) = signal {
+                    // KeyboardInterrupt, with what was computed.
+                    let v = sig.value(py);
+                    v.setattr("result", partial)?;
+                    return Err(sig);
+                }
+                return Err(Interrupted::new_err(e.to_string()));
+            }
+            Err(to_py_err(py, &e, partial))
+        }
+    }
+}
+
+/// `navfuse.simulate`: generate into `out`; returns sim_summary.json's text.
+#[pyfunction]
+#[pyo3(signature = (kind, value, base_dir, out, seed=None))]
+fn simulate(
+    py: Python<'_>,
+    kind: &str,
+    value: &str,
+    base_dir: PathBuf,
+    out: PathBuf,
+    seed: Option<u64>,
+) -> PyResult<String> {
+    use navfuse_sim::scenario::Scenario;
+    let stop = StopFlag::new();
+    let work = || -> anyhow::Result<String> {
+        let mut sc = match kind {
+            "path" => Scenario::load(Path::new(value))?,
+            _ => Scenario::from_text(&base_dir.join("<scenario text>"), value.to_string())?,
+        };
+        if let Some(s) = seed {
+            sc.file.seed = s;
+        }
+        let summary = navfuse_sim::generate::generate(&sc, &out)?;
+        let json = serde_json::to_string_pretty(&summary)? + "\n";
+        std::fs::write(out.join("sim_summary.json"), &json)?;
+        Ok(json)
+    };
+    let (r, signal) = detached(py, &stop, work)?;
+    if let Some(sig) = signal {
+        return Err(sig);
+    }
+    r.map_err(|e| to_py_err_any(py, &e))
+}
+
+/// The Python module.
+#[pymodule]
+fn _navfuse(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(run, m)?)?;
+    m.add_function(wrap_pyfunction!(simulate, m)?)?;
+    readers::register(m)?;
+    errors::register(m)?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}
