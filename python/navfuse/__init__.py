@@ -45,7 +45,8 @@ ConfigLike = Union[str, "os.PathLike[str]", Mapping[str, Any]]
 def _frame(cols: Optional[Dict[str, Any]]) -> Optional[pd.DataFrame]:
     if cols is None:
         return None
-    return pd.DataFrame(cols)
+    # The arrays are the frame's own (made for it in Rust): no copy.
+    return pd.DataFrame(cols, copy=False)
 
 
 def _config_arg(config: ConfigLike, base_dir: Union[str, "os.PathLike[str]", None],
@@ -264,7 +265,7 @@ def evaluate(solution: Any, truth: Any, *, gaps: Optional[str] = None,
     w = None if window is None else (float(window[0]), float(window[1]))
     stats, errors = _navfuse.evaluate(_traj_arg(solution), _traj_arg(truth), gaps, la, w,
                                       solution_format, truth_format, list(quality))
-    return EvalResult(json.loads(stats), pd.DataFrame(errors))
+    return EvalResult(json.loads(stats), _frame(errors))
 
 
 def read_trajectory(path: Union[str, "os.PathLike[str]"], format: str = "auto",
@@ -273,7 +274,7 @@ def read_trajectory(path: Union[str, "os.PathLike[str]"], format: str = "auto",
     text, PX4 ULog), its format recognised by content unless named: gps_week, t_s,
     lat_deg, lon_deg, h_m and, when the file has them, vn/ve/vd_mps, roll/pitch/yaw_deg."""
     cols, fmt, warnings = _navfuse.read_trajectory(os.fspath(path), format, list(quality))
-    df = pd.DataFrame(cols)
+    df = _frame(cols)
     df.attrs["format"] = fmt
     df.attrs["warnings"] = warnings
     return df
@@ -291,7 +292,7 @@ def read_imu(config: ConfigLike, *, base_dir: Union[str, "os.PathLike[str]", Non
     (increments over each interval ending at t_s). ``df.attrs["gps_week"]``: the week."""
     kind, value, base = _config_arg(config, base_dir, kf_gins)
     cols, week = _navfuse.read_imu(kind, value, base)
-    df = pd.DataFrame(cols)
+    df = _frame(cols)
     df.attrs["gps_week"] = week
     return df
 
@@ -304,7 +305,7 @@ def read_gnss(config: ConfigLike, *, base_dir: Union[str, "os.PathLike[str]", No
     without velocity)."""
     kind, value, base = _config_arg(config, base_dir, kf_gins)
     cols, week, warnings = _navfuse.read_gnss(kind, value, base)
-    df = pd.DataFrame(cols)
+    df = _frame(cols)
     df.attrs["gps_week"] = week
     df.attrs["warnings"] = warnings
     return df
@@ -315,6 +316,6 @@ def read_rinex_obs(path: Union[str, "os.PathLike[str]"]) -> pd.DataFrame:
     row per epoch, satellite and code: gps_week, t_s, flag, sat (G05), code (C1C),
     value, lli, ssi."""
     cols, warnings = _navfuse.read_rinex_obs(os.fspath(path))
-    df = pd.DataFrame(cols)
+    df = _frame(cols)
     df.attrs["warnings"] = warnings
     return df

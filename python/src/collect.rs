@@ -16,75 +16,77 @@ use navfuse_io::fmt::fixed9_value;
 use navfuse_io::nav::{imu_err_fields, nav_fields, std_fields, CSV_NAV_HEADER, CSV_STD_HEADER};
 use navfuse_io::smoothed::SeparationRow;
 use std::path::PathBuf;
+use std::sync::mpsc::{sync_channel, SyncSender};
+use std::thread::JoinHandle;
 
-/// `solution.csv` columns (also `smoothed.csv`).
+/// `solution.csv` columns (also `smoothed.csv`), one vector each.
 pub struct SolutionCols {
-    pub frame: Frame,
-    with_std: bool,
-    with_integrity: bool,
-    /// Column index of the first nav value, std, integrity, state.
-    nav0: usize,
-    std0: usize,
-    integrity: usize,
-    state: usize,
-    week: usize,
+    week: Vec<Option<i64>>,
+    /// t_s .. yaw_deg.
+    nav: [Vec<f64>; 10],
+    /// The 21 std columns (with `[output] std`).
+    std: Option<Vec<Vec<f64>>>,
+    integrity: Option<Vec<Option<i64>>>,
+    state: Vec<Option<&'static str>>,
 }
 
 impl SolutionCols {
     pub fn new(layout: &OutputLayout) -> Self {
-        let mut frame = Frame::new();
-        let mut names = CSV_NAV_HEADER.split(',');
-        let week = frame.i64(names.next().unwrap_or("gps_week"));
-        let nav0 = week + 1;
-        for n in names {
-            frame.f64(n);
-        }
-        let std0 = nav0 + 10;
-        if layout.std {
-            for n in CSV_STD_HEADER.split(',') {
-                frame.f64(n);
-            }
-        }
-        let integrity = if layout.integrity {
-            frame.i64("gnss_integrity")
-        } else {
-            usize::MAX
-        };
-        let state = frame.str("state");
         SolutionCols {
-            frame,
-            with_std: layout.std,
-            with_integrity: layout.integrity,
-            nav0,
-            std0,
-            integrity,
-            state,
-            week,
+            week: Vec::new(),
+            nav: Default::default(),
+            std: layout.std.then(|| vec![Vec::new(); 21]),
+            integrity: layout.integrity.then(Vec::new),
+            state: Vec::new(),
         }
     }
 
     pub fn push(&mut self, r: &SolutionRecord) {
-        let f = &mut self.frame;
-        f.push_i64(self.week, Some(i64::from(r.gps_week)));
-        for (k, v) in nav_fields(r).iter().skip(1).enumerate() {
-            f.push_f64(self.nav0 + k, fixed9_value(*v));
+        self.week.push(Some(i64::from(r.gps_week)));
+        for (c, v) in self.nav.iter_mut().zip(nav_fields(r).iter().skip(1)) {
+            c.push(fixed9_value(*v));
         }
-        if self.with_std {
-            let std = r.std.map(|s| std_fields(&s));
-            for k in 0..21 {
-                f.push_f64(self.std0 + k, std.map_or(f64::NAN, |s| fixed9_value(s[k])));
+        if let Some(cols) = self.std.as_mut() {
+            match r.std.map(|s| std_fields(&s)) {
+                Some(s) => cols
+                    .iter_mut()
+                    .zip(s)
+                    .for_each(|(c, v)| c.push(fixed9_value(v))),
+                None => cols.iter_mut().for_each(|c| c.push(f64::NAN)),
             }
         }
-        if self.with_integrity {
-            f.push_i64(self.integrity, r.gnss_integrity.map(i64::from));
+        if let Some(c) = self.integrity.as_mut() {
+            c.push(r.gnss_integrity.map(i64::from));
         }
-        f.push_str(self.state, r.state.map(|s| s.name()));
+        self.state.push(r.state.map(|s| s.name()));
+    }
+
+    /// The columns, named as the CSV header.
+    pub fn frame(self) -> Frame {
+        let mut f = Frame::new();
+        let mut names = CSV_NAV_HEADER.split(',');
+        f.add_i64(names.next().unwrap_or("gps_week"), self.week);
+        for (n, c) in names.zip(self.nav) {
+            f.add_f64(n, c);
+        }
+        if let Some(cols) = self.std {
+            for (n, c) in CSV_STD_HEADER.split(',').zip(cols) {
+                f.add_f64(n, c);
+            }
+        }
+        if let Some(c) = self.integrity {
+            f.add_i64("gnss_integrity", c);
+        }
+        f.add_str("state", self.state);
+        f
     }
 }
 
 /// `imu_err.txt` columns, named as the std ones.
 pub struct ImuErrCols {
-    pub frame: Frame,
+    week: Vec<Option<i64>>,
+    t: Vec<f64>,
+    errors: [Vec<f64>; 12],
 }
 
 impl ImuErrCols {
@@ -104,21 +106,29 @@ impl ImuErrCols {
     ];
 
     fn new() -> Self {
-        let mut frame = Frame::new();
-        frame.i64("gps_week");
-        frame.f64("t_s");
-        for n in Self::NAMES {
-            frame.f64(n);
+        ImuErrCols {
+            week: Vec::new(),
+            t: Vec::new(),
+            errors: Default::default(),
         }
-        ImuErrCols { frame }
     }
 
     fn push(&mut self, r: &SolutionRecord) {
-        self.frame.push_i64(0, Some(i64::from(r.gps_week)));
-        self.frame.push_f64(1, fixed9_value(r.nav.t));
-        for (k, v) in imu_err_fields(&r.imu_errors).iter().enumerate() {
-            self.frame.push_f64(2 + k, fixed9_value(*v));
+        self.week.push(Some(i64::from(r.gps_week)));
+        self.t.push(fixed9_value(r.nav.t));
+        for (c, v) in self.errors.iter_mut().zip(imu_err_fields(&r.imu_errors)) {
+            c.push(fixed9_value(v));
         }
+    }
+
+    pub fn frame(self) -> Frame {
+        let mut f = Frame::new();
+        f.add_i64("gps_week", self.week);
+        f.add_f64("t_s", self.t);
+        for (n, c) in Self::NAMES.iter().zip(self.errors) {
+            f.add_f64(n, c);
+        }
+        f
     }
 }
 
@@ -170,10 +180,96 @@ pub struct Collected {
     pub events_log: String,
 }
 
+/// The forward solution's columns, filled on a thread of their own from batches of
+/// records (as FileSink's writers are), so the conversion runs beside the filter.
+struct ColumnThread {
+    batch: Vec<SolutionRecord>,
+    tx: Option<SyncSender<Vec<SolutionRecord>>>,
+    handle: Option<JoinHandle<(SolutionCols, ImuErrCols)>>,
+}
+
+/// Records per batch handed to the column thread.
+const BATCH: usize = 2048;
+
+impl ColumnThread {
+    fn start(layout: &OutputLayout) -> Self {
+        let (tx, rx) = sync_channel::<Vec<SolutionRecord>>(8);
+        let mut sol = SolutionCols::new(layout);
+        let handle = std::thread::spawn(move || {
+            let mut err = ImuErrCols::new();
+            for batch in rx {
+                for r in &batch {
+                    sol.push(r);
+                    err.push(r);
+                }
+            }
+            (sol, err)
+        });
+        ColumnThread {
+            batch: Vec::with_capacity(BATCH),
+            tx: Some(tx),
+            handle: Some(handle),
+        }
+    }
+
+    fn push(&mut self, r: &SolutionRecord) {
+        self.batch.push(*r);
+        if self.batch.len() == BATCH {
+            self.send();
+        }
+    }
+
+    fn send(&mut self) {
+        let b = std::mem::replace(&mut self.batch, Vec::with_capacity(BATCH));
+        if let Some(tx) = &self.tx {
+            // A closed channel means the thread ended (a panic): join reports it.
+            let _ = tx.send(b);
+        }
+    }
+
+    /// The columns, once every record is in.
+    fn finish(&mut self) -> Result<Option<(SolutionCols, ImuErrCols)>, Error> {
+        if !self.batch.is_empty() {
+            self.send();
+        }
+        self.tx = None;
+        match self.handle.take() {
+            Some(h) => h
+                .join()
+                .map(Some)
+                .map_err(|_| Error::Other("the column thread of the Python run panicked".into())),
+            None => Ok(None),
+        }
+    }
+}
+
 /// Collects [`Collected`], and forwards to a [`FileSink`] when there is one.
 pub struct CollectSink {
-    pub files: Option<FileSink>,
+    files: Option<FileSink>,
+    columns: Option<ColumnThread>,
     pub out: Collected,
+}
+
+impl CollectSink {
+    pub fn new(files: Option<FileSink>) -> Self {
+        CollectSink {
+            files,
+            columns: None,
+            out: Collected::default(),
+        }
+    }
+
+    /// Every forward record into the columns (after the last epoch, or at the report
+    /// of a run that ended before its `end`).
+    fn join_columns(&mut self) -> Result<(), Error> {
+        if let Some(mut c) = self.columns.take() {
+            if let Some((sol, err)) = c.finish()? {
+                self.out.solution = Some(sol);
+                self.out.imu_errors = Some(err);
+            }
+        }
+        Ok(())
+    }
 }
 
 impl SolutionSink for CollectSink {
@@ -185,8 +281,7 @@ impl SolutionSink for CollectSink {
     }
 
     fn begin(&mut self, layout: &OutputLayout, files: &mut Vec<PathBuf>) -> Result<(), Error> {
-        self.out.solution = Some(SolutionCols::new(layout));
-        self.out.imu_errors = Some(ImuErrCols::new());
+        self.columns = Some(ColumnThread::start(layout));
         match self.files.as_mut() {
             Some(f) => f.begin(layout, files),
             None => Ok(()),
@@ -194,11 +289,8 @@ impl SolutionSink for CollectSink {
     }
 
     fn epoch(&mut self, r: &SolutionRecord) -> Result<(), Error> {
-        if let Some(s) = self.out.solution.as_mut() {
-            s.push(r);
-        }
-        if let Some(s) = self.out.imu_errors.as_mut() {
-            s.push(r);
+        if let Some(c) = self.columns.as_mut() {
+            c.push(r);
         }
         match self.files.as_mut() {
             Some(f) => f.epoch(r),
@@ -231,10 +323,12 @@ impl SolutionSink for CollectSink {
     }
 
     fn end(&mut self) -> Result<(), Error> {
-        match self.files.as_mut() {
+        let cols = self.join_columns();
+        let files = match self.files.as_mut() {
             Some(f) => f.end(),
             None => Ok(()),
-        }
+        };
+        cols.and(files)
     }
 
     fn begin_smoothed(
@@ -284,12 +378,13 @@ impl SolutionSink for CollectSink {
     }
 
     fn report(&mut self, job: &mut JobResult, progress: bool) -> Result<(), Error> {
+        let cols = self.join_columns();
         let r = match self.files.as_mut() {
             Some(f) => f.report(job, progress),
             None => Ok(()),
         };
         self.out.events_log = navfuse_app::events_log_text(job);
         self.out.summary_json = serde_json::to_string_pretty(&job.to_json())? + "\n";
-        r
+        cols.and(r)
     }
 }

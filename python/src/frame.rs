@@ -34,15 +34,23 @@ impl Frame {
     pub fn i64(&mut self, name: &str) -> usize {
         self.add(name, Col::I64(Vec::new()))
     }
-    pub fn str(&mut self, name: &str) -> usize {
-        self.add(name, Col::Str(Vec::new()))
-    }
     pub fn text(&mut self, name: &str) -> usize {
         self.add(name, Col::Text(Vec::new()))
     }
     fn add(&mut self, name: &str, c: Col) -> usize {
         self.cols.push((name.to_string(), c));
         self.cols.len() - 1
+    }
+
+    /// Whole columns.
+    pub fn add_f64(&mut self, name: &str, v: Vec<f64>) {
+        self.add(name, Col::F64(v));
+    }
+    pub fn add_i64(&mut self, name: &str, v: Vec<Option<i64>>) {
+        self.add(name, Col::I64(v));
+    }
+    pub fn add_str(&mut self, name: &str, v: Vec<Option<&'static str>>) {
+        self.add(name, Col::Str(v));
     }
 
     pub fn push_f64(&mut self, k: usize, v: f64) {
@@ -52,11 +60,6 @@ impl Frame {
     }
     pub fn push_i64(&mut self, k: usize, v: Option<i64>) {
         if let Some((_, Col::I64(c))) = self.cols.get_mut(k) {
-            c.push(v);
-        }
-    }
-    pub fn push_str(&mut self, k: usize, v: Option<&'static str>) {
-        if let Some((_, Col::Str(c))) = self.cols.get_mut(k) {
             c.push(v);
         }
     }

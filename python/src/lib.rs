@@ -44,10 +44,24 @@ fn detached<T: Send>(
     f: impl FnOnce() -> T + Send,
 ) -> PyResult<(T, Option<PyErr>)> {
     std::thread::scope(|s| {
-        let h = s.spawn(f);
+        let (done_tx, done_rx) = std::sync::mpsc::channel::<()>();
+        let h = s.spawn(move || {
+            let v = f();
+            let _ = done_tx.send(());
+            v
+        });
         let mut signal: Option<PyErr> = None;
-        while !h.is_finished() {
-            py.detach(|| std::thread::sleep(Duration::from_millis(50)));
+        let mut rx = done_rx;
+        loop {
+            // The receiver moves into the GIL-free closure and back (it is not Sync).
+            let (back, waited) = py.detach(move || {
+                let w = rx.recv_timeout(Duration::from_millis(50));
+                (rx, w)
+            });
+            rx = back;
+            if !matches!(waited, Err(std::sync::mpsc::RecvTimeoutError::Timeout)) {
+                break; // done, or the thread ended without sending (a panic)
+            }
             if signal.is_none() {
                 if let Err(e) = py.check_signals() {
                     stop.atomic().store(2, std::sync::atomic::Ordering::SeqCst);
@@ -69,10 +83,10 @@ fn collected_to_py(py: Python<'_>, c: Collected) -> PyResult<Py<PyDict>> {
     let d = PyDict::new(py);
     let frame =
         |f: Option<Frame>| -> PyResult<Option<Py<PyDict>>> { f.map(|f| f.into_py(py)).transpose() };
-    d.set_item("solution", frame(c.solution.map(|s| s.frame))?)?;
-    d.set_item("imu_errors", frame(c.imu_errors.map(|s| s.frame))?)?;
+    d.set_item("solution", frame(c.solution.map(|s| s.frame()))?)?;
+    d.set_item("imu_errors", frame(c.imu_errors.map(|s| s.frame()))?)?;
     d.set_item("states", frame(c.states.map(|s| s.frame))?)?;
-    d.set_item("smoothed", frame(c.smoothed.map(|s| s.frame))?)?;
+    d.set_item("smoothed", frame(c.smoothed.map(|s| s.frame()))?)?;
     d.set_item(
         "smoothed_states",
         frame(c.smoothed_states.map(|s| s.frame))?,
@@ -109,7 +123,7 @@ fn run(
             Some(dir) => Some(FileSink::create(dir).map_err(|e| (e, None))?),
             None => None,
         };
-        let mut sink = CollectSink { files, out: Collected::default() };
+        let mut sink = CollectSink::new(files);
         let opts = RunOptions { stop: Some(stop_run), ..Default::default() };
         match navfuse_app::run(cfg, &mut sink, &opts) {
             Ok(job) => Ok((sink.out, job.error.clone(), warnings)),
