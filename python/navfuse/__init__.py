@@ -32,8 +32,8 @@ from ._toml import dumps as _toml_dumps
 __version__ = _navfuse.__version__
 
 __all__ = [
-    "run", "simulate", "evaluate", "read_imu", "read_gnss", "read_rinex_obs",
-    "read_nav", "read_trajectory", "RunResult", "SimResult", "EvalResult",
+    "run", "simulate", "evaluate", "batch", "batch_case", "batch_cases", "batch_table", "read_imu", "read_gnss", "read_rinex_obs",
+    "read_nav", "read_trajectory", "RunResult", "SimResult", "EvalResult", "BatchResult",
     "NavfuseError", "InputError", "RunError", "Interrupted",
 ]
 
@@ -319,3 +319,50 @@ def read_rinex_obs(path: Union[str, "os.PathLike[str]"]) -> pd.DataFrame:
     df = _frame(cols)
     df.attrs["warnings"] = warnings
     return df
+
+
+@dataclass
+class BatchResult:
+    """What ``navfuse.batch`` returns: ``table`` (one row per case in manifest order,
+    the columns of batch.csv: index, name, seed, status, epochs, the figures, error),
+    each case's wall time ``wall_s`` and the batch's ``total_wall_s`` [s]."""
+
+    table: pd.DataFrame
+    wall_s: List[float]
+    total_wall_s: float
+
+    @property
+    def failed(self) -> int:
+        return int((self.table["status"] != "completed").sum())
+
+
+def batch_cases(manifest: Union[str, "os.PathLike[str]"]) -> List[str]:
+    """The case names of a batch manifest (docs/CONFIG.md "Batch manifest"), in order."""
+    return _navfuse.batch_cases(os.fspath(manifest))
+
+
+def batch_case(manifest: Union[str, "os.PathLike[str]"], index: int, *,
+               out: Union[str, "os.PathLike[str]", None] = None) -> Dict[str, Any]:
+    """Case ``index`` of a manifest, as ``navfuse batch`` computes it (its run written
+    to ``out/<name>`` with ``out``): the row of batch.csv as a dict. A failed case is a
+    row with status "failed" and its error, not an exception."""
+    return _navfuse.batch_case(os.fspath(manifest), int(index),
+                               None if out is None else os.fspath(out))
+
+
+def batch_table(rows: Sequence[Mapping[str, Any]]) -> pd.DataFrame:
+    """Rows of ``batch_case`` (in any order) as the combined table, in case order."""
+    rows = sorted(rows, key=lambda r: r["index"])
+    return pd.DataFrame(list(rows))
+
+
+def batch(manifest: Union[str, "os.PathLike[str]"], *, out: Union[str, "os.PathLike[str]", None] = None,
+          jobs: Optional[int] = None, progress: bool = False) -> BatchResult:
+    """``navfuse batch MANIFEST --jobs N``: every case on a thread pool in this process
+    (``jobs``: default the number of cores). With ``out`` the case folders and
+    batch.csv / batch.json / batch_timing.csv are written. The rows are the same
+    whatever ``jobs``."""
+    n = jobs if jobs is not None else (os.cpu_count() or 1)
+    rows, wall, total = _navfuse.batch(os.fspath(manifest),
+                                       None if out is None else os.fspath(out), int(n), progress)
+    return BatchResult(batch_table(rows), list(wall), float(total))

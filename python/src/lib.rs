@@ -4,6 +4,7 @@
 //! release the GIL; errors become `navfuse.InputError` (with `file`, `line`, `field`)
 //! or `navfuse.NavfuseError`.
 
+mod batch;
 mod collect;
 mod errors;
 mod frame;
@@ -193,6 +194,7 @@ fn _navfuse(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(run, m)?)?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
     readers::register(m)?;
+    batch::register(m)?;
     errors::register(m)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
