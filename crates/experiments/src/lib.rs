@@ -16,6 +16,7 @@
 mod attack;
 mod bench;
 mod navigate;
+mod pool;
 mod reproduce;
 mod scenarios;
 pub mod track;

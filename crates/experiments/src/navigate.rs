@@ -6,15 +6,19 @@ use std::path::{Path, PathBuf};
 
 use navfuse_app::{
     run, Error, FileSink, JobResult, MemorySink, OutputLayout, RunConfig, RunOptions,
-    SolutionRecord, SolutionSink,
+    SmoothedEpoch, SmoothedLayout, SolutionRecord, SolutionSink, StateValues,
 };
+use navfuse_core::InnovationRow;
+use navfuse_io::smoothed::SeparationRow;
 
 use crate::track::{solution_track, Track};
 
-/// A finished run: its report (events, counts) and its output epochs.
+/// A finished run: its report (events, counts) and its output epochs (forward, and
+/// smoothed when the smoother ran).
 pub(crate) struct Navigated {
     pub job: JobResult,
     pub records: Vec<SolutionRecord>,
+    pub smoothed: Vec<SolutionRecord>,
 }
 
 impl Navigated {
@@ -44,16 +48,23 @@ pub(crate) fn navigate(cfg: RunConfig, keep: Option<&Path>) -> Result<Navigated,
     Ok(Navigated {
         job,
         records: memory.records,
+        smoothed: memory.smoothed.into_iter().map(|e| e.record).collect(),
     })
 }
 
-/// The records kept in memory and written to files.
+/// The records kept in memory and written to files: every call goes to the file
+/// sink (so the directory holds exactly what `navfuse run --out` writes), the output
+/// epochs also to memory.
 struct Both {
     memory: MemorySink,
     files: FileSink,
 }
 
 impl SolutionSink for Both {
+    fn configuration(&mut self, cfg: &RunConfig, files: &mut Vec<PathBuf>) -> Result<(), Error> {
+        self.files.configuration(cfg, files)
+    }
+
     fn begin(&mut self, layout: &OutputLayout, files: &mut Vec<PathBuf>) -> Result<(), Error> {
         self.memory.begin(layout, files)?;
         self.files.begin(layout, files)
@@ -64,6 +75,14 @@ impl SolutionSink for Both {
         self.files.epoch(record)
     }
 
+    fn states(&mut self, states: &StateValues) -> Result<(), Error> {
+        self.files.states(states)
+    }
+
+    fn innovations(&mut self, rows: &[InnovationRow]) -> Result<(), Error> {
+        self.files.innovations(rows)
+    }
+
     fn location(&self) -> String {
         self.files.location()
     }
@@ -71,6 +90,33 @@ impl SolutionSink for Both {
     fn end(&mut self) -> Result<(), Error> {
         self.memory.end()?;
         self.files.end()
+    }
+
+    fn begin_smoothed(
+        &mut self,
+        layout: &SmoothedLayout,
+        files: &mut Vec<PathBuf>,
+    ) -> Result<(), Error> {
+        self.memory.begin_smoothed(layout, files)?;
+        self.files.begin_smoothed(layout, files)
+    }
+
+    fn smoothed(&mut self, epoch: &SmoothedEpoch) -> Result<(), Error> {
+        self.memory.smoothed(epoch)?;
+        self.files.smoothed(epoch)
+    }
+
+    fn separation(&mut self, row: &SeparationRow) -> Result<(), Error> {
+        self.files.separation(row)
+    }
+
+    fn end_smoothed(&mut self) -> Result<(), Error> {
+        self.memory.end_smoothed()?;
+        self.files.end_smoothed()
+    }
+
+    fn scratch_dir(&self) -> Option<PathBuf> {
+        self.files.scratch_dir()
     }
 
     fn report(&mut self, job: &mut JobResult, progress: bool) -> Result<(), Error> {
