@@ -14,7 +14,6 @@ use navfuse_sim::generate::generate;
 use super::manifest::{Case, Source};
 use super::metrics::figures;
 use crate::navigate::{navigate, Navigated};
-use crate::track::solution_track;
 use crate::work::WorkDir;
 
 /// What a case gave: its output epochs and its figures.
@@ -96,11 +95,11 @@ fn score(
     lever_arm: Option<nalgebra::Vector3<f64>>,
     truth_path: &Path,
 ) -> Result<EvalReport> {
-    let sol = solution_track(if case.smooth {
-        &nav.smoothed
+    let sol = if case.smooth {
+        nav.smoothed_track()
     } else {
-        &nav.records
-    });
+        nav.track()
+    };
     let (Some(first), Some(last)) = (sol.points.first(), sol.points.last()) else {
         bail!("no solution epochs to score");
     };
@@ -133,7 +132,7 @@ fn score(
 
 fn outcome(nav: &Navigated, report: Option<&EvalReport>) -> Outcome {
     Outcome {
-        epochs: nav.records.len(),
+        epochs: nav.rows.len(),
         metrics: figures(&nav.job, report),
     }
 }
