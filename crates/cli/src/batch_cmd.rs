@@ -2,15 +2,21 @@
 //! a folder per case and one table; exit status 1 when a case failed (the tables are
 //! written first).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 use navfuse_experiments::batch::{run_batch, write_tables, Manifest};
 
 /// `--out` when not given.
 pub const DEFAULT_OUT: &str = "out/batch";
 
-pub fn main(manifest: &Path, out: PathBuf, jobs: Option<usize>, quiet: bool) -> Result<()> {
+pub fn main(
+    manifest: &Path,
+    out: &Path,
+    jobs: Option<usize>,
+    tables_only: bool,
+    quiet: bool,
+) -> Result<()> {
     let m = Manifest::load(manifest)?;
     let jobs = match jobs {
         Some(j) => j,
@@ -19,8 +25,9 @@ pub fn main(manifest: &Path, out: PathBuf, jobs: Option<usize>, quiet: bool) -> 
     if jobs == 0 {
         bail!("--jobs must be at least 1");
     }
-    let r = run_batch(&m, Some(&out), jobs, !quiet)?;
-    write_tables(&out, &r)?;
+    std::fs::create_dir_all(out).with_context(|| format!("{}: cannot create", out.display()))?;
+    let r = run_batch(&m, (!tables_only).then_some(out), jobs, !quiet)?;
+    write_tables(out, &r)?;
     let n = r.rows.len();
     let failed = r.failed();
     eprintln!(

@@ -234,6 +234,11 @@ enum Command {
         /// Cases run at once (threads). Default: the number of CPUs.
         #[arg(long, value_name = "N")]
         jobs: Option<usize>,
+        /// Write only the three tables into DIR, no case folders: the runs' output
+        /// stays in memory and a Monte Carlo case's simulated data go to a temporary
+        /// folder, removed after the case (the same rows).
+        #[arg(long)]
+        tables_only: bool,
         /// No line per finished case (the final line stays).
         #[arg(long, short)]
         quiet: bool,
@@ -464,8 +469,9 @@ fn main() -> ExitCode {
             manifest,
             out,
             jobs,
+            tables_only,
             quiet,
-        } => batch_cmd::main(&manifest, out, jobs, quiet),
+        } => batch_cmd::main(&manifest, &out, jobs, tables_only, quiet),
         Command::Allan(args) => allan_cmd::main(&args),
         Command::Bench {
             kf_gins,

@@ -1,5 +1,5 @@
 //! `navfuse batch` (issue 21): many runs in one process. The tables are the same bytes
-//! whatever the number of jobs; a case folder holds what `navfuse run` writes; a case
+//! whatever the number of jobs and with or without case folders; a case folder holds what `navfuse run` writes; a case
 //! scored in memory gives the row it gives with its files written, in any thread;
 //! bad manifests are errors naming the file, line and key; a failing case is a row,
 //! and the exit status says so after the tables are written.
@@ -61,11 +61,12 @@ fn demo(file: &str) -> String {
 const MC: &str = "[monte_carlo]\nscenario = \"tiny.toml\"\nseeds = 4\nfirst_seed = 7\nname = \"mc\"\noutages = \"10/30@345630\"\ngaps = \"10/30@345630\"\n";
 
 #[test]
-fn monte_carlo_tables_are_the_same_bytes_whatever_the_jobs() {
+fn monte_carlo_tables_are_the_same_bytes_whatever_the_jobs_and_files() {
     let (dir, m) = setup("batch-jobs", MC);
     let (a, b) = (dir.join("a"), dir.join("b"));
     let one = batch(&[s(&m), "--out", s(&a), "--jobs", "1"]);
-    let three = batch(&[s(&m), "--out", s(&b), "--jobs", "3", "-q"]);
+    // With 3 jobs and no case folders: the same tables.
+    let three = batch(&[s(&m), "--out", s(&b), "--jobs", "3", "-q", "--tables-only"]);
     let err = String::from_utf8_lossy(&one.stderr);
     assert!(one.status.success(), "{err}");
     assert!(
@@ -114,6 +115,7 @@ fn monte_carlo_tables_are_the_same_bytes_whatever_the_jobs() {
     ] {
         assert!(a.join("mc_seed0007").join(f).is_file(), "{f}");
     }
+    assert!(!b.join("mc_seed0007").exists());
     let timing = std::fs::read_to_string(a.join("batch_timing.csv")).unwrap();
     assert!(
         timing.starts_with("index,name,wall_s\n0,mc_seed0007,"),
