@@ -1,8 +1,9 @@
 //! `navfuse batch` (issue 21): many runs in one process. The tables are the same bytes
-//! whatever the number of jobs and with or without case folders; a case folder holds what `navfuse run` writes; a case
-//! scored in memory gives the row it gives with its files written, in any thread;
-//! bad manifests are errors naming the file, line and key; a failing case is a row,
-//! and the exit status says so after the tables are written.
+//! whatever the number of jobs and with or without case folders; a case folder holds
+//! what `navfuse run` writes; a case scored in memory gives the row it gives with its
+//! files written, in any thread; bad manifests are errors naming the file, line and
+//! key; a failing case is a row, and the exit status says so after the tables are
+//! written.
 
 mod common;
 
