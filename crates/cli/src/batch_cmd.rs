@@ -25,6 +25,7 @@ pub fn main(
     if jobs == 0 {
         bail!("--jobs must be at least 1");
     }
+    // Before the runs: a folder that cannot be made is found out at once.
     std::fs::create_dir_all(out).with_context(|| format!("{}: cannot create", out.display()))?;
     let r = run_batch(&m, (!tables_only).then_some(out), jobs, !quiet)?;
     write_tables(out, &r)?;

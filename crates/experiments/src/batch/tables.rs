@@ -10,8 +10,9 @@ use serde_json::{json, Map, Value};
 
 use super::{BatchResult, CaseRow, METRICS};
 
-/// Write `out`/batch.csv, batch.json and batch_timing.csv.
+/// Write `out`/batch.csv, batch.json and batch_timing.csv (`out` created if missing).
 pub fn write_tables(out: &Path, r: &BatchResult) -> Result<()> {
+    std::fs::create_dir_all(out).with_context(|| format!("{}: cannot create", out.display()))?;
     write(&out.join("batch.csv"), &to_csv(&r.rows))?;
     let json = serde_json::to_string_pretty(&to_json(&r.rows))? + "\n";
     write(&out.join("batch.json"), &json)?;
