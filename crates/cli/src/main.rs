@@ -1,14 +1,16 @@
 //! `navfuse`: the command line: clap, and one call per subcommand. `run_cmd` (the
 //! navigator over files, a thin call into `navfuse_app`), `eval_cmd` (scoring a
 //! solution file), `sim_cmd` (the simulator), `allan_cmd` (Allan deviation of an IMU
-//! file, `navfuse_app::allan`); `reproduce` (the papers' experiments)
-//! and `bench` (speed, loose and tight coupling) are `navfuse_experiments`.
+//! file, `navfuse_app::allan`), `batch_cmd` (many runs in one process); `reproduce`
+//! (the papers' experiments), `bench` (speed, loose and tight coupling) and the
+//! batch runner are `navfuse_experiments`.
 
 // The doc comments below are clap's --help text, where `[spoofing]` names a TOML
 // section and `[m]` a unit; rustdoc is not their reader.
 #![allow(rustdoc::broken_intra_doc_links)]
 
 mod allan_cmd;
+mod batch_cmd;
 mod eval_cmd;
 mod report_cmd;
 mod run_cmd;
@@ -205,6 +207,39 @@ enum Command {
         #[arg(long)]
         seed: Option<u64>,
         /// No summary line.
+        #[arg(long, short)]
+        quiet: bool,
+    },
+    /// Many runs in one process on a pool of threads: the cases of a manifest (a
+    /// list of run configurations, or one simulator scenario over many seeds;
+    /// docs/CONFIG.md "Batch manifest"), a folder per case and one table.
+    ///
+    /// Writes DIR/NAME/ per case (exactly what `navfuse run --out DIR/NAME` writes;
+    /// no progress bar, the warnings in its events.log; a Monte Carlo case's
+    /// simulated data in DIR/NAME/sim), and DIR/batch.csv and DIR/batch.json (one row
+    /// per case in manifest order: index, name, seed, status, epochs, the figures
+    /// against the truth (horizontal / vertical / 3D position RMS and max, P95
+    /// horizontal, velocity and attitude RMS, per-gap maxima with gaps) and the GNSS
+    /// updates used / rejected, error; numbers in shortest round-trip form, the same
+    /// bytes whatever --jobs) and DIR/batch_timing.csv (each case's wall time).
+    /// Prints a line per finished case on stderr (unless -q) and the total wall time
+    /// and cases/s at the end. A failing case does not stop the others: its row says
+    /// failed with the error, and the exit status is 1 once the tables are written.
+    Batch {
+        /// The manifest (TOML; paths in it relative to its folder).
+        manifest: PathBuf,
+        /// Output folder (created if missing).
+        #[arg(long, value_name = "DIR", default_value = batch_cmd::DEFAULT_OUT)]
+        out: PathBuf,
+        /// Cases run at once (threads). Default: the number of CPUs.
+        #[arg(long, value_name = "N")]
+        jobs: Option<usize>,
+        /// Write only the three tables into DIR, no case folders: the runs' output
+        /// stays in memory and a Monte Carlo case's simulated data go to a temporary
+        /// folder, removed after the case (the same rows).
+        #[arg(long)]
+        tables_only: bool,
+        /// No line per finished case (the final line stays).
         #[arg(long, short)]
         quiet: bool,
     },
@@ -430,6 +465,13 @@ fn main() -> ExitCode {
             jump_runs,
             clean_hours,
         }),
+        Command::Batch {
+            manifest,
+            out,
+            jobs,
+            tables_only,
+            quiet,
+        } => batch_cmd::main(&manifest, &out, jobs, tables_only, quiet),
         Command::Allan(args) => allan_cmd::main(&args),
         Command::Bench {
             kf_gins,

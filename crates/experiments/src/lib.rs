@@ -5,6 +5,9 @@
 //!   (`navfuse_app::run`), score it against the simulated truth, print the figures
 //!   beside the paper's. seed004 also has the spoofing experiments (`attack`: the
 //!   drift attack's variant table, jump attacks, false alarms on clean drives).
+//! - [`batch`]: many runs in one process on a pool of threads (`navfuse batch`):
+//!   a manifest of configurations or one scenario over many seeds, a folder per case
+//!   and one table.
 //! - [`bench()`]: speed and memory of the navigator, loose coupling on the KF-GINS
 //!   stand-in or tight coupling on a simulated drive.
 //!
@@ -14,8 +17,10 @@
 //! `bench::tight`; [`track`] (trajectories to score).
 
 mod attack;
+pub mod batch;
 mod bench;
 mod navigate;
+mod pool;
 mod reproduce;
 mod scenarios;
 pub mod track;

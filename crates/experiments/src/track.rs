@@ -18,7 +18,7 @@ pub struct Track {
 
 impl Track {
     /// Rows of (GPS week, state); times count from the first row's week.
-    fn of_rows(rows: impl IntoIterator<Item = (u32, NavState)>) -> Track {
+    pub(crate) fn of_rows(rows: impl IntoIterator<Item = (u32, NavState)>) -> Track {
         let (week, points) = points_of_rows(rows.into_iter().collect());
         Track { week, points }
     }

@@ -3,6 +3,7 @@
 
 use anyhow::{Context, Result};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
 
 pub(crate) struct WorkDir {
     dir: PathBuf,
@@ -11,14 +12,21 @@ pub(crate) struct WorkDir {
 }
 
 impl WorkDir {
-    /// `keep`, or a new temporary directory named after `what` and the process.
+    /// `keep`, or a new temporary directory named after `what`, the process and a
+    /// number counted in the process (so that threads of one process running at once
+    /// each get their own).
     pub fn new(keep: Option<PathBuf>, what: &str) -> Result<WorkDir> {
+        static NEXT: AtomicU64 = AtomicU64::new(0);
         let w = match keep {
             Some(dir) => WorkDir { dir, keep: true },
-            None => WorkDir {
-                dir: std::env::temp_dir().join(format!("navfuse-{what}-{}", std::process::id())),
-                keep: false,
-            },
+            None => {
+                let n = NEXT.fetch_add(1, Ordering::Relaxed);
+                let name = format!("navfuse-{what}-{}-{n}", std::process::id());
+                WorkDir {
+                    dir: std::env::temp_dir().join(name),
+                    keep: false,
+                }
+            }
         };
         std::fs::create_dir_all(&w.dir)
             .with_context(|| format!("{}: cannot create", w.dir.display()))?;

@@ -28,8 +28,6 @@ mod reaction;
 mod variants;
 
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
 
 use anyhow::{anyhow, bail, Result};
 use navfuse_core::integrity::Transition;
@@ -39,6 +37,7 @@ use navfuse_sim::scenario::Scenario;
 use serde_json::{json, Value};
 
 use crate::navigate::Navigated;
+use crate::pool::Next;
 use crate::scenarios::builtin;
 use crate::work::WorkDir;
 
@@ -105,36 +104,20 @@ fn navigate(
     })
 }
 
-/// `f` over `items` on `WORKERS` threads, results in order; stops handing out work at
-/// the first error and returns it. Each item runs on a fresh thread: faer's AVX-512
-/// matrix kernels (the filter's covariance products) leave the upper vector register
-/// state dirty in the thread that navigated, and the simulator's SSE code then runs
-/// about 4x slower in that thread (measured: 0.4 s -> 2.1 s per lap simulated).
+/// `f` over `items` on `WORKERS` threads (each item on a fresh thread,
+/// [`crate::pool`]), results in order; stops handing out work at the first error and
+/// returns it.
 fn par_map<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> Result<R> + Sync) -> Result<Vec<R>> {
-    let next = AtomicUsize::new(0);
-    let out: Mutex<Vec<Option<Result<R>>>> = Mutex::new(items.iter().map(|_| None).collect());
-    std::thread::scope(|s| {
-        for _ in 0..WORKERS.min(items.len()) {
-            s.spawn(|| loop {
-                let i = next.fetch_add(1, Ordering::SeqCst);
-                if i >= items.len() {
-                    break;
-                }
-                let r = std::thread::scope(|t| {
-                    t.spawn(|| f(&items[i]))
-                        .join()
-                        .unwrap_or_else(|_| Err(anyhow!("a run panicked")))
-                });
-                let failed = r.is_err();
-                out.lock().expect("no worker panicked")[i] = Some(r);
-                if failed {
-                    next.store(items.len(), Ordering::SeqCst);
-                    break;
-                }
-            });
-        }
-    });
-    let out = out.into_inner().expect("no worker panicked");
+    let out = crate::pool::run_indexed(
+        items.len(),
+        WORKERS,
+        |i| f(&items[i]),
+        |_| Err(anyhow!("a run panicked")),
+        |_, r| match r {
+            Ok(_) => Next::Continue,
+            Err(_) => Next::Stop,
+        },
+    );
     let mut res = Vec::with_capacity(out.len());
     let mut missing = false;
     for r in out {

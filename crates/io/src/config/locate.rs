@@ -59,7 +59,9 @@ fn toml_span_of(root: &DeTable<'_>, key: &str) -> Option<std::ops::Range<usize>>
     best
 }
 
-pub(super) fn toml_line_of(text: &str, key: &str) -> Option<usize> {
+/// The 1-based line of the dotted `key` (e.g. `run[2].config`) in `text`, or of the
+/// deepest part of it that exists.
+pub fn toml_line_of(text: &str, key: &str) -> Option<usize> {
     let root = DeTable::parse(text).ok()?;
     toml_span_of(root.get_ref(), key).map(|s| line_of(text, s.start))
 }
@@ -149,7 +151,9 @@ pub(super) fn backticked(msg: &str) -> Option<&str> {
     Some(rest.split_once('`')?.0)
 }
 
-pub(super) fn toml_error(path: &Path, text: &str, e: &toml::de::Error) -> ConfigError {
+/// A TOML parse error of the file `path` (text `text`) as a [`ConfigError`] naming
+/// the line and the dotted key (unknown keys, wrong types, missing keys).
+pub fn toml_error(path: &Path, text: &str, e: &toml::de::Error) -> ConfigError {
     let message = e.message().trim().to_string();
     let Some(span) = e.span() else {
         return ConfigError::new(path, None, None, message);

@@ -62,7 +62,9 @@ use crate::input::{GnssSource, HeadingSource, ImuSource, OdometerSource, OutputS
 use error::KeyErr;
 use kfgins::{kfgins_to_raw, toml_to_yaml_key, yaml_error, yaml_line_of, KfProbe, KfYaml};
 use kfgins::{KF_NOISE_KEYS, KF_TOP_KEYS};
-use locate::{toml_error, toml_line_of};
+/// The line of a key and the error of a TOML parse, for other TOML files read the
+/// same way (`navfuse batch`'s manifest).
+pub use locate::{toml_error, toml_line_of};
 use paths::resolve_path;
 use root::{convert, TomlRoot};
 
