@@ -2,7 +2,9 @@
 //! schedulers (Dask, Ray, Slurm): the same `navfuse_experiments::batch::run_case`, so a
 //! row is the same whoever computes it.
 
+use crate::detached;
 use crate::errors::to_py_err_any;
+use navfuse_app::StopFlag;
 use navfuse_experiments::batch::{run_batch, run_case, write_tables, CaseRow, Manifest, METRICS};
 use pyo3::exceptions::PyIndexError;
 use pyo3::prelude::*;
@@ -45,7 +47,12 @@ fn batch_cases(py: Python<'_>, manifest: PathBuf) -> PyResult<Vec<String>> {
 /// One case (`out`: the batch folder; its run goes to out/<name>).
 #[pyfunction]
 #[pyo3(signature = (manifest, index, out=None))]
-fn batch_case(py: Python<'_>, manifest: PathBuf, index: usize, out: Option<PathBuf>) -> PyResult<Py<PyDict>> {
+fn batch_case(
+    py: Python<'_>,
+    manifest: PathBuf,
+    index: usize,
+    out: Option<PathBuf>,
+) -> PyResult<Py<PyDict>> {
     let m = load(py, &manifest)?;
     if index >= m.len() {
         return Err(PyIndexError::new_err(format!(
@@ -55,7 +62,12 @@ fn batch_case(py: Python<'_>, manifest: PathBuf, index: usize, out: Option<PathB
             m.len().saturating_sub(1)
         )));
     }
-    let row = py.detach(|| run_case(&m, index, out.as_deref()));
+    // On a fresh thread, as navfuse batch runs each case (see crate::detached).
+    let stop = StopFlag::new();
+    let (row, signal) = detached(py, &stop, || run_case(&m, index, out.as_deref()))?;
+    if let Some(sig) = signal {
+        return Err(sig);
+    }
     row_to_py(py, &row)
 }
 
@@ -71,15 +83,23 @@ fn batch(
     progress: bool,
 ) -> PyResult<(Vec<Py<PyDict>>, Vec<f64>, f64)> {
     let m = load(py, &manifest)?;
-    let r = py
-        .detach(|| -> anyhow::Result<_> {
-            let r = run_batch(&m, out.as_deref(), jobs, progress)?;
-            if let Some(o) = &out {
-                write_tables(o, &r)?;
-            }
-            Ok(r)
-        })
-        .map_err(|e| to_py_err_any(py, &e))?;
-    let rows = r.rows.iter().map(|x| row_to_py(py, x)).collect::<PyResult<_>>()?;
+    let stop = StopFlag::new();
+    let (r, signal) = detached(py, &stop, || -> anyhow::Result<_> {
+        let r = run_batch(&m, out.as_deref(), jobs, progress)?;
+        if let Some(o) = &out {
+            write_tables(o, &r)?;
+        }
+        Ok(r)
+    })?;
+    if let Some(sig) = signal {
+        // The batch has no stop flag: Ctrl-C is raised once it has ended.
+        return Err(sig);
+    }
+    let r = r.map_err(|e| to_py_err_any(py, &e))?;
+    let rows = r
+        .rows
+        .iter()
+        .map(|x| row_to_py(py, x))
+        .collect::<PyResult<_>>()?;
     Ok((rows, r.wall_s, r.total_wall_s))
 }

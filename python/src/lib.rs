@@ -36,7 +36,9 @@ fn load_config(kind: &str, value: &str, base_dir: &Path) -> Result<RunConfig, na
     })
 }
 
-/// Run `f` without the GIL on a thread of its own, checking Python's signals every
+/// Run `f` without the GIL on a fresh thread of its own (as navfuse batch runs each
+/// case: faer's AVX kernels leave a thread's upper vector state dirty, which slows
+/// later SSE code in it; navfuse_experiments pool.rs), checking Python's signals every
 /// 50 ms: Ctrl-C sets `stop` (the run ends cleanly, its output kept) and is raised
 /// once the run has ended.
 fn detached<T: Send>(

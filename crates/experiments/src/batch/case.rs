@@ -4,11 +4,11 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
+use navfuse_app::score::ScoreOptions;
 use navfuse_app::{config, RunConfig};
-use navfuse_core::eval::{evaluate, EvalOptions, EvalReport};
-use navfuse_core::time::SECONDS_PER_WEEK;
-use navfuse_io::trajectory::{read_trajectory, Trajectory};
+use navfuse_core::eval::EvalReport;
+use navfuse_io::trajectory::{read_trajectory, TrajFormat, Trajectory};
 use navfuse_sim::generate::generate;
 
 use super::manifest::{Case, Source};
@@ -91,43 +91,38 @@ fn navigate_case(case: &Case, mut cfg: RunConfig, dir: Option<&Path>) -> Result<
 fn score(
     case: &Case,
     nav: &Navigated,
-    mut truth: Trajectory,
+    truth: Trajectory,
     lever_arm: Option<nalgebra::Vector3<f64>>,
     truth_path: &Path,
 ) -> Result<EvalReport> {
-    let sol = if case.smooth {
+    let track = if case.smooth {
         nav.smoothed_track()
     } else {
         nav.track()
     };
-    let (Some(first), Some(last)) = (sol.points.first(), sol.points.last()) else {
-        bail!("no solution epochs to score");
+    let sol = Trajectory {
+        format: TrajFormat::Nav,
+        week: track.week,
+        points: track.points,
+        warnings: Vec::new(),
     };
-    if truth.points.is_empty() {
-        bail!("{}: no reference epochs", truth_path.display());
-    }
-    if sol.week != 0 && truth.week != 0 && sol.week != truth.week {
-        let shift = (truth.week as f64 - sol.week as f64) * SECONDS_PER_WEEK;
-        truth.points.iter_mut().for_each(|p| p.t += shift);
-    }
-    let opts = EvalOptions {
-        gaps: case
-            .gaps
-            .as_ref()
-            .map_or_else(Vec::new, |g| g.windows_in(first.t, last.t)),
+    let opts = ScoreOptions {
+        gaps: case.gaps.clone(),
         lever_arm_b: lever_arm,
         ..Default::default()
     };
-    let rep = evaluate(&sol.points, &truth.points, &opts);
-    if rep.epochs == 0 {
-        bail!(
-            "no reference epoch of {} falls inside the solution's time span {:.3} .. {:.3}",
-            truth_path.display(),
-            first.t,
-            last.t
-        );
-    }
-    Ok(rep)
+    let name = if case.smooth {
+        "the smoothed solution"
+    } else {
+        "the solution"
+    };
+    Ok(navfuse_app::score::score(
+        &sol,
+        name,
+        truth,
+        &truth_path.display().to_string(),
+        &opts,
+    )?)
 }
 
 fn outcome(nav: &Navigated, report: Option<&EvalReport>) -> Outcome {

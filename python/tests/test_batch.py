@@ -1,0 +1,98 @@
+"""navfuse.batch, batch_case and navfuse.dask against `navfuse batch`: the same rows,
+bit for bit, whatever runs them (threads, Dask worker processes)."""
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import navfuse
+from conftest import ROOT, SHORT_SCENARIO
+
+SEEDS = 6
+
+
+@pytest.fixture(scope="module")
+def manifest(tmp_path_factory):
+    d = tmp_path_factory.mktemp("mc")
+    p = d / "mc.toml"
+    p.write_text(f"""[monte_carlo]
+scenario = "{SHORT_SCENARIO.as_posix()}"
+seeds = {SEEDS}
+first_seed = 11
+name = "car"
+outages = "20/60@345640"
+gaps = "20/60@345640"
+""")
+    return p
+
+
+@pytest.fixture(scope="module")
+def serial_csv(cli, manifest, tmp_path_factory):
+    out = tmp_path_factory.mktemp("serial")
+    cli("batch", manifest, "--out", out, "--jobs", 1, "--tables-only", "-q")
+    return pd.read_csv(out / "batch.csv")
+
+
+def assert_same_rows(table, csv):
+    """Every column of batch.csv, equal to the last bit (NaN where both have none)."""
+    assert len(table) == len(csv)
+    for c in csv.columns:
+        a, b = table[c].to_numpy(), csv[c].to_numpy()
+        if c in ("name", "status"):
+            assert list(a) == list(b), c
+        elif c == "error":
+            assert all(pd.isna(x) for x in a) and all(pd.isna(x) for x in b)
+        else:
+            a, b = a.astype(np.float64), b.astype(np.float64)
+            assert np.array_equal(a, b, equal_nan=True), (c, a, b)
+
+
+def test_names(manifest):
+    assert navfuse.batch_cases(manifest) == [f"car_seed{s:04d}" for s in range(11, 11 + SEEDS)]
+
+
+def test_batch_threads_equal_the_cli(manifest, serial_csv):
+    r = navfuse.batch(manifest, jobs=2)
+    assert r.failed == 0 and len(r.wall_s) == SEEDS
+    assert_same_rows(r.table, serial_csv)
+    assert (r.table["h_rms_m"] > 0).all() and (r.table["gap_h_max_rms_m"] > 0).all()
+
+
+def test_batch_writes_the_cli_tables(cli, manifest, tmp_path):
+    navfuse.batch(manifest, out=tmp_path / "py", jobs=2)
+    cli("batch", manifest, "--out", tmp_path / "cli", "--jobs", 1, "-q")
+    for name in ("batch.csv", "batch.json"):
+        assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes()
+    case = "car_seed0011"
+    assert ((tmp_path / "py" / case / "solution.nav").read_bytes()
+            == (tmp_path / "cli" / case / "solution.nav").read_bytes())
+
+
+def test_one_case_equals_its_row(manifest, serial_csv):
+    row = navfuse.batch_case(manifest, 3)
+    assert row["name"] == "car_seed0014" and row["seed"] == 14
+    assert_same_rows(navfuse.batch_table([row]), serial_csv.iloc[[3]].reset_index(drop=True))
+    with pytest.raises(IndexError):
+        navfuse.batch_case(manifest, SEEDS)
+
+
+def test_bad_manifest_names_file_line_and_key(tmp_path):
+    p = tmp_path / "bad.toml"
+    p.write_text('[monte_carlo]\nscenario = "x.toml"\nseedz = 3\n')
+    with pytest.raises(navfuse.InputError) as e:
+        navfuse.batch_cases(p)
+    assert "seedz" in str(e.value)
+    assert e.value.file == str(p) and e.value.line == 3 and e.value.field == "monte_carlo.seedz"
+
+
+def test_dask_local_cluster_equals_serial(manifest, serial_csv):
+    distributed = pytest.importorskip("distributed", reason="skipped: dask.distributed not installed")
+    import navfuse.dask
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  host="127.0.0.1", dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        table = navfuse.dask.run_manifest(manifest, client)
+        # The tasks ran in the worker processes, not here.
+        pids = set(client.run(lambda: __import__("os").getpid()).values())
+    assert len(pids) == 2
+    assert_same_rows(table, serial_csv)
