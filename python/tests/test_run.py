@@ -115,3 +115,24 @@ def test_the_gil_is_released_during_a_run():
     # run held the GIL).
     assert (t1 - t0) > 0.05
     assert len(during) >= 0.25 * (t1 - t0) / 0.002 * 0.2
+
+
+def test_ctrl_c_stops_the_run_cleanly(tmp_path):
+    """Ctrl-C during a run: KeyboardInterrupt once the run has stopped, with what was
+    computed, and the files complete up to that epoch (the KF-GINS stand-in: long
+    enough to be interrupted)."""
+    import _thread
+    cfg = ROOT / "examples" / "kfgins-synthetic.toml"
+    if not (ROOT.parent / "shared" / "data" / "kf-gins" / "synthetic").is_dir():
+        pytest.skip("skipped: ../shared/data/kf-gins/synthetic is not here")
+    timer = threading.Timer(0.1, _thread.interrupt_main)
+    timer.start()
+    with pytest.raises(KeyboardInterrupt) as e:
+        navfuse.run(cfg, out=tmp_path)
+        time.sleep(5)  # the run ended first: let the interrupt land (fails below)
+    r = e.value.result
+    assert r is not None and r.status == "interrupted"
+    assert 0 < len(r.solution) < 680_000
+    lines = (tmp_path / "solution.nav").read_text().splitlines()
+    assert len(lines) == len(r.solution)
+    assert "interrupted" in (tmp_path / "events.log").read_text().splitlines()[-1]
