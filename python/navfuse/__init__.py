@@ -17,6 +17,7 @@ from __future__ import annotations
 import json
 import os
 import tempfile
+import warnings as _warnings
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -26,7 +27,7 @@ import numpy as np
 import pandas as pd
 
 from . import _navfuse
-from ._errors import InputError, NavfuseError, RunError
+from ._errors import InputError, Interrupted, NavfuseError, RunError
 from ._toml import dumps as _toml_dumps
 
 __version__ = _navfuse.__version__
@@ -36,8 +37,6 @@ __all__ = [
     "read_nav", "read_trajectory", "RunResult", "SimResult", "EvalResult", "BatchResult",
     "NavfuseError", "InputError", "RunError", "Interrupted",
 ]
-
-Interrupted = _navfuse._Interrupted
 
 ConfigLike = Union[str, "os.PathLike[str]", Mapping[str, Any]]
 
@@ -51,18 +50,33 @@ def _frame(cols: Optional[Dict[str, Any]]) -> Optional[pd.DataFrame]:
 
 def _config_arg(config: ConfigLike, base_dir: Union[str, "os.PathLike[str]", None],
                 kf_gins: bool = False) -> Tuple[str, str, str]:
-    """(kind, value, base_dir) for the extension: a path, TOML text or a dict."""
+    """(kind, value, base_dir) for the extension: a path, TOML (or KF-GINS YAML) text,
+    or a dict. A str is text when it has a line break, or an '=' (TOML) / ':' (YAML)
+    and is not the name of a file; else a path."""
     base = os.fspath(base_dir) if base_dir is not None else os.getcwd()
     if isinstance(config, Mapping):
         return "toml", _toml_dumps(dict(config)), base
     if isinstance(config, os.PathLike):
-        return "path", os.fspath(config), base
+        return ("yaml-path" if kf_gins else "path"), os.fspath(config), base
     if not isinstance(config, str):
         raise TypeError(f"config: expected a path, TOML text or a dict, found {type(config).__name__}")
-    looks_like_text = "\n" in config or ("=" in config and not os.path.exists(config))
-    if looks_like_text:
+    is_file_name = os.path.exists(config) or config.strip().lower().endswith((".toml", ".yaml", ".yml"))
+    marker = ":" if kf_gins else "="
+    if "\n" in config or (marker in config and not is_file_name):
         return ("yaml" if kf_gins else "toml"), config, base
-    return "path", config, base
+    return ("yaml-path" if kf_gins else "path"), config, base
+
+
+def _dict_error(e: InputError, toml_text: str) -> None:
+    """An error in a dict config: its line is one of the TOML made from the dict, so
+    say that line instead of pointing into text the caller never wrote."""
+    if e.line is not None:
+        lines = toml_text.splitlines()
+        made = lines[e.line - 1] if 0 < e.line <= len(lines) else ""
+        e.args = (f"{e.message} (in the configuration dict: `{made.strip()}`)",)
+        e.message = e.args[0]
+        e.file = "<config dict>"
+        e.line = None
 
 
 @dataclass
@@ -128,25 +142,39 @@ def run(config: ConfigLike, *, out: Union[str, "os.PathLike[str]", None] = None,
               ``--smooth-mode``, ``--formats``.
     kf_gins:  ``config`` is KF-GINS YAML text.
 
-    Raises InputError (file, line, field) for bad inputs, RunError when the run failed
-    (``e.result``: what was computed before), KeyboardInterrupt on Ctrl-C (the run stops
-    cleanly; ``e.result`` as well).
+    Raises InputError (file, line, field) for bad inputs and option values, RunError when
+    the run failed (``e.result``: what was computed before), KeyboardInterrupt on Ctrl-C:
+    the forward run stops at the next epoch (smoothing, once under way, finishes first)
+    and ``e.result`` holds what was computed; the files of ``out`` are complete up to
+    that epoch. The configuration's warnings are issued with ``warnings.warn``.
     """
     kind, value, base = _config_arg(config, base_dir, kf_gins)
     out_s = os.fspath(out) if out is not None else None
+    out_p = Path(out_s) if out_s else None
     try:
-        d, _note, warnings = _navfuse.run(kind, value, base, out_s, outages, bool(smooth),
-                                          smooth_mode, formats)
-    except (RunError, InputError) as e:
+        d, warnings = _navfuse.run(kind, value, base, out_s, outages, bool(smooth), smooth_mode,
+                                   formats)
+    except (RunError, InputError, Interrupted) as e:
+        if isinstance(config, Mapping) and isinstance(e, InputError):
+            _dict_error(e, value)
         if e.partial is not None:
-            e.result = _run_result(e.partial, Path(out_s) if out_s else None, [])
+            e.result = _run_result(e.partial, out_p, [])
         raise
     except KeyboardInterrupt as e:
         partial = getattr(e, "result", None)
         if isinstance(partial, dict):
-            e.result = _run_result(partial, Path(out_s) if out_s else None, [])
+            e.result = _run_result(partial, out_p, [])
         raise
-    return _run_result(d, Path(out_s) if out_s else None, warnings)
+    for w in warnings:
+        _warnings.warn(f"navfuse: {w}", stacklevel=2)
+    return _run_result(d, out_p, warnings)
+
+
+class _KeptPath(type(Path())):
+    """A path that keeps the temporary folder it is in alive (``simulate()`` without
+    ``out``): ``navfuse.run(navfuse.simulate(s).run_config)`` works."""
+
+    _owner: Any = None
 
 
 class SimResult:
@@ -169,7 +197,9 @@ class SimResult:
 
     @property
     def run_config(self) -> Path:
-        return self.dir / "run.toml"
+        p = _KeptPath(self.dir / "run.toml")
+        p._owner = self
+        return p
 
     @cached_property
     def truth(self) -> pd.DataFrame:
@@ -244,8 +274,11 @@ def _traj_arg(x: Any) -> Any:
         cols = {c: np.ascontiguousarray(x[c].to_numpy(dtype=np.float64))
                 for c in ("t_s", "lat_deg", "lon_deg", "h_m", "vn_mps", "ve_mps", "vd_mps",
                           "roll_deg", "pitch_deg", "yaw_deg") if c in x.columns}
-        if "gps_week" in x.columns and len(x) > 0:
-            cols["__week__"] = int(x["gps_week"].iloc[0])
+        if "gps_week" in x.columns and len(x) > 0 and "t_s" in cols:
+            # Seconds from the first row's week (a track may cross a week).
+            week = x["gps_week"].to_numpy(dtype=np.int64)
+            cols["t_s"] = np.ascontiguousarray(cols["t_s"] + (week - week[0]) * 604800.0)
+            cols["__week__"] = int(week[0])
         return cols
     return os.fspath(x)
 
@@ -362,7 +395,10 @@ def batch(manifest: Union[str, "os.PathLike[str]"], *, out: Union[str, "os.PathL
     (``jobs``: default the number of cores). With ``out`` the case folders and
     batch.csv / batch.json / batch_timing.csv are written. The rows are the same
     whatever ``jobs``."""
-    n = jobs if jobs is not None else (os.cpu_count() or 1)
+    if jobs is not None and int(jobs) < 1:
+        raise ValueError(f"jobs: expected at least 1, found {jobs}")
+    # 0: the CPUs this process may use, as the CLI's default.
     rows, wall, total = _navfuse.batch(os.fspath(manifest),
-                                       None if out is None else os.fspath(out), int(n), progress)
+                                       None if out is None else os.fspath(out),
+                                       0 if jobs is None else int(jobs), progress)
     return BatchResult(batch_table(rows), list(wall), float(total))

@@ -24,11 +24,23 @@ class InputError(NavfuseError, ValueError):
         self.line = line
         self.field = field
         self.partial = partial
+        self.result = None
 
 
 class RunError(NavfuseError, RuntimeError):
     """A run that could not start or had to stop (no initial pose, refused inputs,
     numerical failure). ``result`` holds what was computed before, or None."""
+
+    def __init__(self, message: str, *, partial: Any = None) -> None:
+        super().__init__(message)
+        self.message = message
+        self.partial = partial
+        self.result = None
+
+
+class Interrupted(NavfuseError):
+    """A run stopped by its stop flag (Ctrl-C raises KeyboardInterrupt instead);
+    ``result`` holds what was computed."""
 
     def __init__(self, message: str, *, partial: Any = None) -> None:
         super().__init__(message)

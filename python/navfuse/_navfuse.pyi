@@ -10,10 +10,6 @@ Columns = Dict[str, Union[np.ndarray, List[Optional[str]]]]
 
 __version__: str
 
-class _BaseError(Exception): ...
-class _Interrupted(_BaseError):
-    """A run stopped by its stop flag (not by Ctrl-C, which raises KeyboardInterrupt)."""
-
 def run(
     kind: str,
     value: str,
@@ -23,10 +19,11 @@ def run(
     smooth: bool = False,
     smooth_mode: Optional[str] = None,
     formats: Optional[str] = None,
-) -> Tuple[Dict[str, Any], Optional[str], List[str]]:
-    """kind: "path", "toml" or "yaml". Returns ({solution, imu_errors, states,
-    smoothed, smoothed_states: Columns or None, summary_json, events_log: str}, note,
-    config warnings). Releases the GIL; Ctrl-C stops the run cleanly."""
+) -> Tuple[Dict[str, Any], List[str]]:
+    """kind: "path", "yaml-path" (KF-GINS), "toml" or "yaml" (text). Returns
+    ({solution, imu_errors, states, smoothed, smoothed_states: Columns or None,
+    summary_json, events_log: str}, config warnings). Releases the GIL; Ctrl-C stops
+    the run cleanly."""
 
 def simulate(kind: str, value: str, base_dir: str, out: str, seed: Optional[int] = None) -> str:
     """Generate the scenario into ``out``; returns sim_summary.json's text."""
@@ -48,4 +45,4 @@ def evaluate(
     """Returns (the `navfuse eval --json` report as text, the per-epoch errors)."""
 def batch_cases(manifest: str) -> List[str]: ...
 def batch_case(manifest: str, index: int, out: Optional[str] = None) -> Dict[str, Any]: ...
-def batch(manifest: str, out: Optional[str] = None, jobs: int = 1, progress: bool = False) -> Tuple[List[Dict[str, Any]], List[float], float]: ...
+def batch(manifest: str, out: Optional[str] = None, jobs: int = 0, progress: bool = False) -> Tuple[List[Dict[str, Any]], List[float], float]: ...

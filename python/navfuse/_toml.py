@@ -5,37 +5,42 @@ from __future__ import annotations
 
 import math
 import os
+import re
 from typing import Any, Dict, List
+
+_BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
+_ESCAPES = {'"': '\\"', "\\": "\\\\", "\b": "\\b", "\t": "\\t", "\n": "\\n", "\f": "\\f", "\r": "\\r"}
 
 
 def _key(k: str) -> str:
-    if k and all(c.isalnum() or c in "_-" for c in k):
-        return k
-    return _str(k)
+    return k if _BARE_KEY.fullmatch(k) else _str(k)
 
 
 def _str(s: str) -> str:
-    out = s.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n").replace("\t", "\\t")
+    out = "".join(_ESCAPES.get(c) or (f"\\u{ord(c):04x}" if ord(c) < 0x20 or ord(c) == 0x7F else c)
+                  for c in s)
     return f'"{out}"'
 
 
 def _value(v: Any, where: str) -> str:
+    if type(v).__module__ == "numpy":  # NumPy scalars and arrays: Python values first
+        v = v.tolist()
     if isinstance(v, bool):
         return "true" if v else "false"
     if isinstance(v, int):
-        return str(v)
+        if not -(2**63) <= v < 2**63:
+            raise ValueError(f"config key {where}: {v} is outside TOML's 64-bit integers")
+        return str(int(v))
     if isinstance(v, float):
         if not math.isfinite(v):
             raise ValueError(f"config key {where}: {v} is not a finite number")
-        return repr(v)
+        return repr(float(v))
     if isinstance(v, (str, os.PathLike)):
         return _str(os.fspath(v))
     if isinstance(v, (list, tuple)):
         return "[" + ", ".join(_value(x, where) for x in v) + "]"
     if isinstance(v, dict):
         return "{ " + ", ".join(f"{_key(k)} = {_value(x, where + '.' + k)}" for k, x in v.items()) + " }"
-    if hasattr(v, "tolist"):  # NumPy scalars and arrays
-        return _value(v.tolist(), where)
     raise TypeError(f"config key {where}: cannot write a {type(v).__name__} as TOML")
 
 

@@ -71,10 +71,10 @@ fn batch_case(
     row_to_py(py, &row)
 }
 
-/// Every case on `jobs` threads; with `out`, the case folders and the tables
+/// Every case on `jobs` threads (0: the CPUs this process may use); with `out`, the case folders and the tables
 /// (batch.csv, batch.json, batch_timing.csv). Returns (rows, wall_s, total_wall_s).
 #[pyfunction]
-#[pyo3(signature = (manifest, out=None, jobs=1, progress=false))]
+#[pyo3(signature = (manifest, out=None, jobs=0, progress=false))]
 fn batch(
     py: Python<'_>,
     manifest: PathBuf,
@@ -83,6 +83,11 @@ fn batch(
     progress: bool,
 ) -> PyResult<(Vec<Py<PyDict>>, Vec<f64>, f64)> {
     let m = load(py, &manifest)?;
+    // 0: as many as the CLI's default (the CPUs this process may use).
+    let jobs = match jobs {
+        0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+        n => n,
+    };
     let stop = StopFlag::new();
     let (r, signal) = detached(py, &stop, || -> anyhow::Result<_> {
         let r = run_batch(&m, out.as_deref(), jobs, progress)?;

@@ -8,16 +8,7 @@ use navfuse_io::config::ConfigError;
 use navfuse_io::InputError;
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyModule};
-
-pyo3::create_exception!(_navfuse, NavfuseError, pyo3::exceptions::PyException);
-pyo3::create_exception!(_navfuse, Interrupted, NavfuseError);
-
-pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    m.add("_BaseError", m.py().get_type::<NavfuseError>())?;
-    m.add("_Interrupted", m.py().get_type::<Interrupted>())?;
-    Ok(())
-}
+use pyo3::types::PyDict;
 
 /// Where an input error points.
 struct Located {
@@ -52,7 +43,7 @@ fn of_config(c: &ConfigError) -> Located {
 }
 
 /// An instance of `navfuse._errors.<class>` raised with `message` and keywords.
-fn raise(py: Python<'_>, class: &str, message: String, kw: &Bound<'_, PyDict>) -> PyErr {
+pub fn raise(py: Python<'_>, class: &str, message: String, kw: &Bound<'_, PyDict>) -> PyErr {
     let made = py
         .import("navfuse._errors")
         .and_then(|m| m.getattr(class))
@@ -106,4 +97,29 @@ pub fn to_py_err_any(py: Python<'_>, e: &anyhow::Error) -> PyErr {
         }
     }
     raise_located(py, format!("{e:#}"), l, None)
+}
+
+/// A bad value of an option (`outages=`, `smooth_mode=`, `formats=`): InputError
+/// with the option as its field.
+pub fn option_error(py: Python<'_>, option: &str, message: String) -> PyErr {
+    let kw = PyDict::new(py);
+    let _ = kw.set_item("field", option);
+    raise(py, "InputError", format!("{option}: {message}"), &kw)
+}
+
+/// A run stopped by its stop flag (not Ctrl-C): navfuse.Interrupted.
+pub fn interrupted(py: Python<'_>, message: String, partial: Option<Py<PyDict>>) -> PyErr {
+    let kw = PyDict::new(py);
+    let _ = kw.set_item("partial", partial);
+    raise(py, "Interrupted", message, &kw)
+}
+
+/// A panic in the extension (a bug): RunError saying so.
+pub fn panicked(py: Python<'_>) -> PyErr {
+    raise(
+        py,
+        "RunError",
+        "navfuse: the run panicked (a bug: please report it with the configuration)".into(),
+        &PyDict::new(py),
+    )
 }

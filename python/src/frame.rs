@@ -1,5 +1,5 @@
 //! Columns of a table, built in Rust and handed to Python as a dict of NumPy arrays
-//! (`navfuse/_frames.py` makes the DataFrame). Column names carry their units
+//! (`navfuse/__init__.py` makes the DataFrame). Column names carry their units
 //! (`lat_deg`, `vn_mps`), as in the CSV files navfuse writes.
 
 use numpy::IntoPyArray;
@@ -12,7 +12,7 @@ pub enum Col {
     /// Integers; a missing value makes the column float64 with NaN (as pandas reads a
     /// CSV column with empty fields).
     I64(Vec<Option<i64>>),
-    /// Text; missing values become None (NaN in the DataFrame).
+    /// Text; missing values are None (pandas' str dtype shows them as NaN).
     Str(Vec<Option<&'static str>>),
     Text(Vec<String>),
 }

@@ -11,7 +11,7 @@ mod frame;
 mod readers;
 
 use collect::{CollectSink, Collected};
-use errors::{to_py_err, to_py_err_any, Interrupted};
+use errors::{to_py_err, to_py_err_any};
 use frame::Frame;
 use navfuse_app::{FileSink, RunOptions, RunOverrides, StopFlag};
 use navfuse_io::config::{self, RunConfig};
@@ -26,6 +26,7 @@ fn load_config(kind: &str, value: &str, base_dir: &Path) -> Result<RunConfig, na
     let named = |ext: &str| base_dir.join(format!("<config {ext}>"));
     Ok(match kind {
         "path" => config::load(Path::new(value))?,
+        "yaml-path" => config::load_kfgins_yaml(Path::new(value))?,
         "toml" => config::parse_toml_str(value, &named("text"))?,
         "yaml" => config::parse_kfgins_yaml_str(value, &named("yaml"))?,
         k => {
@@ -74,9 +75,7 @@ fn detached<T: Send>(
         }
         match h.join() {
             Ok(v) => Ok((v, signal)),
-            Err(_) => Err(errors::NavfuseError::new_err(
-                "navfuse: the run panicked (a bug: please report it with the configuration)",
-            )),
+            Err(_) => Err(errors::panicked(py)),
         }
     })
 }
@@ -113,46 +112,78 @@ fn run(
     smooth: bool,
     smooth_mode: Option<String>,
     formats: Option<String>,
-) -> PyResult<(Py<PyDict>, Option<String>, Vec<String>)> {
+) -> PyResult<(Py<PyDict>, Vec<String>)> {
+    // The options first: a bad value is the caller's InputError, naming the option.
+    if let Some(m) = smooth_mode
+        .as_deref()
+        .filter(|m| !matches!(*m, "rts" | "combined"))
+    {
+        return Err(errors::option_error(
+            py,
+            "smooth_mode",
+            format!("expected \"rts\" or \"combined\", found \"{m}\""),
+        ));
+    }
+    if let Some(o) = &outages {
+        navfuse_core::outage::OutageSchedule::parse(o)
+            .map_err(|e| errors::option_error(py, "outages", e.to_string()))?;
+    }
+    if let Some(f) = &formats {
+        navfuse_io::export::ExportFormat::parse_list(f)
+            .map_err(|e| errors::option_error(py, "formats", e.to_string()))?;
+    }
     let stop = StopFlag::new();
     let stop_run = stop.clone();
-    let work = move || -> Result<(Collected, Option<String>, Vec<String>), (navfuse_app::Error, Option<Collected>)> {
-        let mut cfg = load_config(kind, value, &base_dir).map_err(|e| (e, None))?;
-        let warnings = cfg.warnings.clone();
-        RunOverrides { outages, smooth, smooth_mode, formats }
+    let work =
+        move || -> Result<(Collected, Vec<String>), (navfuse_app::Error, Option<Collected>)> {
+            let mut cfg = load_config(kind, value, &base_dir).map_err(|e| (e, None))?;
+            let warnings = cfg.warnings.clone();
+            RunOverrides {
+                outages,
+                smooth,
+                smooth_mode,
+                formats,
+            }
             .apply(&mut cfg)
             .map_err(|e| (e, None))?;
-        let files = match &out {
-            Some(dir) => Some(FileSink::create(dir).map_err(|e| (e, None))?),
-            None => None,
-        };
-        let mut sink = CollectSink::new(files);
-        let opts = RunOptions { stop: Some(stop_run), ..Default::default() };
-        match navfuse_app::run(cfg, &mut sink, &opts) {
-            Ok(job) => Ok((sink.out, job.error.clone(), warnings)),
-            Err(e) => Err((e, Some(sink.out))),
-        }
-    };
-    let (r, signal) = detached(py, &stop, work)?;
-    match r {
-        Ok((c, note, warnings)) => {
-            if let Some(sig) = signal {
-                return Err(sig);
+            let files = match &out {
+                Some(dir) => Some(FileSink::create(dir).map_err(|e| (e, None))?),
+                None => None,
+            };
+            let mut sink = CollectSink::new(files);
+            let opts = RunOptions {
+                stop: Some(stop_run),
+                ..Default::default()
+            };
+            match navfuse_app::run(cfg, &mut sink, &opts) {
+                Ok(_) => Ok((sink.out, warnings)),
+                Err(e) => Err((e, Some(sink.out))),
             }
-            Ok((collected_to_py(py, c)?, note, warnings))
+        };
+    let (r, signal) = detached(py, &stop, work)?;
+    // Ctrl-C: KeyboardInterrupt once the run has stopped, carrying what was computed
+    // (also when the run had got past its last stop check and completed).
+    let with_result = |sig: PyErr, partial: Option<Py<PyDict>>| -> PyResult<PyErr> {
+        sig.value(py).setattr("result", partial)?;
+        Ok(sig)
+    };
+    match r {
+        Ok((c, warnings)) => {
+            let d = collected_to_py(py, c)?;
+            match signal {
+                Some(sig) => Err(with_result(sig, Some(d))?),
+                None => Ok((d, warnings)),
+            }
         }
         Err((e, partial)) => {
             let partial = partial.map(|c| collected_to_py(py, c)).transpose()?;
-            if e.interrupted().is_some() {
-                if let Some(sig) = signal {
-                    // KeyboardInterrupt, with what was computed.
-                    let v = sig.value(py);
-                    v.setattr("result", partial)?;
-                    return Err(sig);
+            match signal {
+                Some(sig) if e.interrupted().is_some() => Err(with_result(sig, partial)?),
+                _ if e.interrupted().is_some() => {
+                    Err(errors::interrupted(py, e.to_string(), partial))
                 }
-                return Err(Interrupted::new_err(e.to_string()));
+                _ => Err(to_py_err(py, &e, partial)),
             }
-            Err(to_py_err(py, &e, partial))
         }
     }
 }
@@ -197,7 +228,6 @@ fn _navfuse(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
     readers::register(m)?;
     batch::register(m)?;
-    errors::register(m)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

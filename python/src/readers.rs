@@ -279,6 +279,14 @@ fn traj_of_columns(d: &Bound<'_, PyDict>, week: u32) -> PyResult<Trajectory> {
     );
     let v = [col("vn_mps")?, col("ve_mps")?, col("vd_mps")?];
     let a = [col("roll_deg")?, col("pitch_deg")?, col("yaw_deg")?];
+    let lens = [&la, &lo, &h].map(Vec::len);
+    let optional = v.iter().chain(&a).flatten().map(Vec::len);
+    if lens.iter().copied().chain(optional).any(|n| n != t.len()) {
+        return Err(PyValueError::new_err(format!(
+            "the trajectory's columns differ in length (t_s has {} rows)",
+            t.len()
+        )));
+    }
     let mut points = Vec::with_capacity(t.len());
     for k in 0..t.len() {
         let vals = [t[k], la[k], lo[k], h[k]];

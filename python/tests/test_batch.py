@@ -92,7 +92,7 @@ def test_dask_local_cluster_equals_serial(manifest, serial_csv):
                                   host="127.0.0.1", dashboard_address=None) as cluster, \
             distributed.Client(cluster) as client:
         table = navfuse.dask.run_manifest(manifest, client)
-        # The tasks ran in the worker processes, not here.
-        pids = set(client.run(lambda: __import__("os").getpid()).values())
-    assert len(pids) == 2
+        # The tasks ran in the two worker processes (not here).
+        done = client.run(lambda dask_worker: dask_worker.state.executed_count)
+    assert len(done) == 2 and sum(done.values()) == SEEDS
     assert_same_rows(table, serial_csv)

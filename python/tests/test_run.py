@@ -49,7 +49,7 @@ def test_text_and_dict_configs_give_the_same_run():
     a = navfuse.run(DEMO)
     b = navfuse.run(text, base_dir=DEMO.parent)
     pd.testing.assert_frame_equal(a.solution, b.solution, check_exact=True)
-    import tomllib
+    tomllib = pytest.importorskip("tomllib", reason="skipped: tomllib needs Python 3.11")
     c = navfuse.run(tomllib.loads(text), base_dir=DEMO.parent)
     pd.testing.assert_frame_equal(a.solution, c.solution, check_exact=True)
 
@@ -136,3 +136,32 @@ def test_ctrl_c_stops_the_run_cleanly(tmp_path):
     lines = (tmp_path / "solution.nav").read_text().splitlines()
     assert len(lines) == len(r.solution)
     assert "interrupted" in (tmp_path / "events.log").read_text().splitlines()[-1]
+
+
+def test_dict_config_with_numpy_values_and_its_errors():
+    import numpy as np
+    tomllib = pytest.importorskip("tomllib", reason="skipped: tomllib needs Python 3.11")
+    cfg = tomllib.loads(DEMO.read_text())
+    cfg["imu"]["rate_hz"] = np.float64(cfg["imu"].get("rate_hz", 100.0))
+    a = navfuse.run(cfg, base_dir=DEMO.parent)
+    assert a.status == "completed"
+    cfg["imu"]["rate_hzz"] = 100
+    with pytest.raises(navfuse.InputError) as e:
+        navfuse.run(cfg, base_dir=DEMO.parent)
+    assert e.value.file == "<config dict>" and e.value.line is None
+    assert "rate_hzz" in e.value.field and "rate_hzz = 100" in str(e.value)
+
+
+@pytest.mark.parametrize("kw, field", [({"outages": "60/x"}, "outages"),
+                                       ({"smooth_mode": "backward"}, "smooth_mode"),
+                                       ({"formats": "pos,shp"}, "formats")])
+def test_bad_option_values_are_input_errors(kw, field):
+    with pytest.raises(navfuse.InputError) as e:
+        navfuse.run(DEMO, **kw)
+    assert e.value.field == field and e.value.file is None
+
+
+def test_a_missing_path_is_not_read_as_text(tmp_path):
+    with pytest.raises(navfuse.InputError) as e:
+        navfuse.run(str(tmp_path / "a=b.toml"))
+    assert "a=b.toml" in str(e.value) and "cannot read" in str(e.value)

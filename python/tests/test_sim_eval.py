@@ -41,6 +41,8 @@ def test_simulate_then_run_then_evaluate(cli, tmp_path):
         assert (sim.dir / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
     res = navfuse.run(sim.run_config)
     ev = navfuse.evaluate(res, sim)
+    # The temporary folder lives as long as a path into it is used.
+    assert navfuse.run(navfuse.simulate(SHORT_SCENARIO, seed=7).run_config).status == "completed"
     cli("run", tmp_path / "cli" / "run.toml", "--out", tmp_path / "cli" / "out", "-q")
     cli_ev = json.loads(cli("eval", tmp_path / "cli" / "out" / "solution.nav",
                             tmp_path / "cli" / "truth.nav", "--json").stdout)
@@ -105,3 +107,24 @@ def test_reader_error_names_the_file(tmp_path):
     with pytest.raises(navfuse.InputError) as e:
         navfuse.read_nav(p)
     assert e.value.file == str(p) and e.value.line == 2
+
+
+def test_evaluate_a_dataframe_across_a_week(cli_demo):
+    sol = navfuse.read_nav(cli_demo / "solution.nav")
+    ref = navfuse.read_trajectory(DEMO.parent / "gnss.pos")
+    a = navfuse.evaluate(sol, ref, lever_arm=(0, -0.05, 0))
+    # The same instants, written as the next week's seconds after the middle row.
+    for df in (sol, ref):
+        late = df["t_s"] > df["t_s"].iloc[len(df) // 2]
+        df.loc[late, "t_s"] -= 604800.0
+        df.loc[late, "gps_week"] += 1
+    b = navfuse.evaluate(sol, ref, lever_arm=(0, -0.05, 0))
+    assert_stats_close(b.stats, a.stats)
+
+
+def test_unequal_columns_are_a_value_error():
+    with pytest.raises(ValueError, match="differ in length"):
+        navfuse._navfuse.evaluate({"t_s": np.arange(3.0), "lat_deg": np.zeros(2),
+                                   "lon_deg": np.zeros(3), "h_m": np.zeros(3)},
+                                  {"t_s": np.arange(3.0), "lat_deg": np.zeros(3),
+                                   "lon_deg": np.zeros(3), "h_m": np.zeros(3)})

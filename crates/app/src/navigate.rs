@@ -287,6 +287,15 @@ pub(crate) fn navigate(
         )
     })?;
     if let Some(l) = log.into_inner() {
+        // A stop asked for at the end of the forward run: no smoothing (the forward
+        // output is complete).
+        if let Some(signal) = opts.stop_requested() {
+            return Err(Interrupted {
+                signal,
+                t: job.last_output_t,
+            }
+            .into());
+        }
         let inputs = crate::smooth::BackwardInputs {
             nav: &cfg.nav,
             measurements: &measurements,

@@ -92,6 +92,13 @@ pub fn main(
         window,
         keep_epochs: errors_csv.is_some(),
     };
+    if opts.lever_arm_b.is_some() && sol.points.iter().any(|p| p.rpy.is_none()) {
+        bail!(
+            "--lever-arm needs attitude in the solution, and {} ({}) has none",
+            solution.display(),
+            sol.format.describe()
+        );
+    }
     let rep = score(
         &sol,
         &solution.display().to_string(),
