@@ -27,7 +27,7 @@ import numpy as np
 import pandas as pd
 
 from . import _navfuse
-from ._errors import InputError, Interrupted, NavfuseError, RunError
+from ._errors import InputError, Interrupted, NavfuseError, NavfuseWarning, RunError
 from ._toml import dumps as _toml_dumps
 
 __version__ = _navfuse.__version__
@@ -35,7 +35,7 @@ __version__ = _navfuse.__version__
 __all__ = [
     "run", "simulate", "evaluate", "batch", "batch_case", "batch_cases", "batch_table", "read_imu", "read_gnss", "read_rinex_obs",
     "read_nav", "read_trajectory", "RunResult", "SimResult", "EvalResult", "BatchResult",
-    "NavfuseError", "InputError", "RunError", "Interrupted",
+    "NavfuseError", "InputError", "RunError", "Interrupted", "NavfuseWarning",
 ]
 
 ConfigLike = Union[str, "os.PathLike[str]", Mapping[str, Any]]
@@ -146,7 +146,9 @@ def run(config: ConfigLike, *, out: Union[str, "os.PathLike[str]", None] = None,
     the run failed (``e.result``: what was computed before), KeyboardInterrupt on Ctrl-C:
     the forward run stops at the next epoch (smoothing, once under way, finishes first)
     and ``e.result`` holds what was computed; the files of ``out`` are complete up to
-    that epoch. The configuration's warnings are issued with ``warnings.warn``.
+    that epoch. The configuration's warnings and the run's plausibility warnings
+    (summary.json ``warnings``: units, axes, time scales, ...) are issued with
+    ``warnings.warn`` as NavfuseWarning.
     """
     kind, value, base = _config_arg(config, base_dir, kf_gins)
     out_s = os.fspath(out) if out is not None else None
@@ -157,6 +159,11 @@ def run(config: ConfigLike, *, out: Union[str, "os.PathLike[str]", None] = None,
     except (RunError, InputError, Interrupted) as e:
         if isinstance(config, Mapping) and isinstance(e, InputError):
             _dict_error(e, value)
+        if (kind in ("toml", "yaml") and base_dir is None and isinstance(e, InputError)
+                and "cannot open" in str(e) and e.file and not os.path.exists(e.file)):
+            e.args = (f"{e.message} (relative paths in a configuration given as text or a "
+                      f"dict resolve against base_dir=, here the current directory {base})",)
+            e.message = e.args[0]
         if e.partial is not None:
             e.result = _run_result(e.partial, out_p, [])
         raise
@@ -165,9 +172,10 @@ def run(config: ConfigLike, *, out: Union[str, "os.PathLike[str]", None] = None,
         if isinstance(partial, dict):
             e.result = _run_result(partial, out_p, [])
         raise
-    for w in warnings:
-        _warnings.warn(f"navfuse: {w}", stacklevel=2)
-    return _run_result(d, out_p, warnings)
+    res = _run_result(d, out_p, warnings)
+    for w in list(warnings) + list(res.summary.get("warnings") or []):
+        _warnings.warn(f"navfuse: {w}", NavfuseWarning, stacklevel=2)
+    return res
 
 
 class _KeptPath(type(Path())):

@@ -47,3 +47,9 @@ class Interrupted(NavfuseError):
         self.message = message
         self.partial = partial
         self.result = None
+
+
+class NavfuseWarning(UserWarning):
+    """A plausibility finding about a run's inputs or result (the ``warnings`` of
+    summary.json: units, axes, time scales, a mostly free-inertial solution, ...) or
+    about its configuration."""

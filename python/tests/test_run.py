@@ -165,3 +165,21 @@ def test_a_missing_path_is_not_read_as_text(tmp_path):
     with pytest.raises(navfuse.InputError) as e:
         navfuse.run(str(tmp_path / "a=b.toml"))
     assert "a=b.toml" in str(e.value) and "cannot read" in str(e.value)
+
+
+def test_plausibility_findings_are_python_warnings():
+    # The everyday mistake: the sensor-to-body rotation left out.
+    text = DEMO.read_text().replace("sensor_to_body_rpy_deg = [180.0, 0.0, 180.0]",
+                                    "sensor_to_body_rpy_deg = [0.0, 0.0, 0.0]")
+    with pytest.warns(navfuse.NavfuseWarning) as caught:
+        res = navfuse.run(text, base_dir=DEMO.parent)
+    msgs = [str(w.message) for w in caught]
+    assert any("sensor_to_body_rpy_deg" in m for m in msgs), msgs
+    assert len(msgs) >= len(res.summary["warnings"])
+
+
+def test_relative_paths_of_text_configs_get_a_hint(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(navfuse.InputError) as e:
+        navfuse.run(DEMO.read_text())
+    assert "base_dir" in str(e.value) and str(tmp_path) in str(e.value)
