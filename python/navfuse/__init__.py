@@ -92,6 +92,9 @@ class RunResult:
     states:          states.csv (extra filter states and their sd_*), or None.
     smoothed:        smoothed.csv when smoothing ran, else None.
     smoothed_states: smoothed_states.csv, or None.
+    innovations:     innovations.csv at full precision: every update an aiding source
+                     tried (t_s, source, rows, y1..y3 the first innovations, nis, gate,
+                     outcome applied / rejected / singular).
     summary:         summary.json as a dict (status, counts, time offset, files, ...).
     events:          the lines of events.log.
     out:             the folder the files were written to (``out=``), or None.
@@ -103,6 +106,7 @@ class RunResult:
     states: Optional[pd.DataFrame]
     smoothed: Optional[pd.DataFrame]
     smoothed_states: Optional[pd.DataFrame]
+    innovations: pd.DataFrame
     summary: Dict[str, Any]
     events: List[str]
     out: Optional[Path]
@@ -121,6 +125,7 @@ def _run_result(d: Dict[str, Any], out: Optional[Path], warnings: List[str]) -> 
         states=_frame(d["states"]),
         smoothed=_frame(d["smoothed"]),
         smoothed_states=_frame(d["smoothed_states"]),
+        innovations=_frame(d["innovations"]),
         summary=json.loads(d["summary_json"]) if d["summary_json"] else {},
         events=d["events_log"].splitlines(),
         out=out,

@@ -22,6 +22,7 @@ def run(
 ) -> Tuple[Dict[str, Any], List[str]]:
     """kind: "path", "yaml-path" (KF-GINS), "toml" or "yaml" (text). Returns
     ({solution, imu_errors, states, smoothed, smoothed_states: Columns or None,
+    innovations: Columns,
     summary_json, events_log: str}, config warnings). Releases the GIL; Ctrl-C stops
     the run cleanly."""
 

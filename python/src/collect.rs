@@ -166,6 +166,48 @@ impl StateCols {
     }
 }
 
+/// `innovations.csv` columns, at full precision (the file rounds to 4-6 decimals).
+#[derive(Default)]
+pub struct InnovationCols {
+    t: Vec<f64>,
+    source: Vec<Option<&'static str>>,
+    rows: Vec<Option<i64>>,
+    y: [Vec<f64>; 3],
+    nis: Vec<f64>,
+    gate: Vec<f64>,
+    outcome: Vec<Option<&'static str>>,
+}
+
+impl InnovationCols {
+    fn push(&mut self, r: &InnovationRow) {
+        self.t.push(r.t);
+        self.source.push(Some(r.source));
+        self.rows.push(i64::try_from(r.rows).ok());
+        for (c, v) in self.y.iter_mut().zip(r.innovation) {
+            c.push(v);
+        }
+        self.nis.push(r.nis);
+        self.gate.push(r.gate.unwrap_or(f64::NAN));
+        self.outcome.push(Some(r.outcome.name()));
+    }
+
+    /// t_s, source, rows, y1 y2 y3 (NaN past `rows`), nis, gate (NaN: not gated),
+    /// outcome.
+    pub fn frame(self) -> Frame {
+        let mut f = Frame::new();
+        f.add_f64("t_s", self.t);
+        f.add_str("source", self.source);
+        f.add_i64("rows", self.rows);
+        for (n, c) in ["y1", "y2", "y3"].into_iter().zip(self.y) {
+            f.add_f64(n, c);
+        }
+        f.add_f64("nis", self.nis);
+        f.add_f64("gate", self.gate);
+        f.add_str("outcome", self.outcome);
+        f
+    }
+}
+
 /// What a run leaves for Python.
 #[derive(Default)]
 pub struct Collected {
@@ -174,6 +216,7 @@ pub struct Collected {
     pub states: Option<StateCols>,
     pub smoothed: Option<SolutionCols>,
     pub smoothed_states: Option<StateCols>,
+    pub innovations: InnovationCols,
     /// summary.json, as written.
     pub summary_json: String,
     /// events.log, as written.
@@ -310,6 +353,7 @@ impl SolutionSink for CollectSink {
     }
 
     fn innovations(&mut self, rows: &[InnovationRow]) -> Result<(), Error> {
+        rows.iter().for_each(|r| self.out.innovations.push(r));
         match self.files.as_mut() {
             Some(f) => f.innovations(rows),
             None => Ok(()),

@@ -93,6 +93,7 @@ fn collected_to_py(py: Python<'_>, c: Collected) -> PyResult<Py<PyDict>> {
         "smoothed_states",
         frame(c.smoothed_states.map(|s| s.frame))?,
     )?;
+    d.set_item("innovations", c.innovations.frame().into_py(py)?)?;
     d.set_item("summary_json", c.summary_json)?;
     d.set_item("events_log", c.events_log)?;
     Ok(d.unbind())

@@ -4,6 +4,7 @@ import threading
 import time
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -183,3 +184,16 @@ def test_relative_paths_of_text_configs_get_a_hint(tmp_path, monkeypatch):
     with pytest.raises(navfuse.InputError) as e:
         navfuse.run(DEMO.read_text())
     assert "base_dir" in str(e.value) and str(tmp_path) in str(e.value)
+
+
+def test_innovations_as_the_cli_file(cli_demo):
+    res = navfuse.run(DEMO)
+    csv = pd.read_csv(cli_demo / "innovations.csv")
+    inn = res.innovations
+    assert list(inn.columns) == list(csv.columns) and len(inn) == len(csv)
+    assert (inn["source"].tolist() == csv["source"].tolist()
+            and inn["outcome"].tolist() == csv["outcome"].tolist())
+    # The file rounds t to 4 decimals, y to 6, nis and gate to 4.
+    for c, tol in (("t_s", 5e-5), ("y1", 5e-7), ("nis", 5e-5), ("gate", 5e-5)):
+        a, b = inn[c].to_numpy(float), csv[c].to_numpy(float)
+        assert ((abs(a - b) <= tol) | (np.isnan(a) & np.isnan(b))).all(), c
