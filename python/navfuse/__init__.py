@@ -407,11 +407,19 @@ def batch(manifest: Union[str, "os.PathLike[str]"], *, out: Union[str, "os.PathL
     """``navfuse batch MANIFEST --jobs N``: every case on a thread pool in this process
     (``jobs``: default the number of cores). With ``out`` the case folders and
     batch.csv / batch.json / batch_timing.csv are written. The rows are the same
-    whatever ``jobs``."""
+    whatever ``jobs``. Ctrl-C: no more cases are started, those under way finish, the
+    tables are written, and KeyboardInterrupt is raised with ``e.result`` (the others
+    "not run")."""
     if jobs is not None and int(jobs) < 1:
         raise ValueError(f"jobs: expected at least 1, found {jobs}")
     # 0: the CPUs this process may use, as the CLI's default.
-    rows, wall, total = _navfuse.batch(os.fspath(manifest),
-                                       None if out is None else os.fspath(out),
-                                       0 if jobs is None else int(jobs), progress)
+    try:
+        rows, wall, total = _navfuse.batch(os.fspath(manifest),
+                                           None if out is None else os.fspath(out),
+                                           0 if jobs is None else int(jobs), progress)
+    except KeyboardInterrupt as e:
+        r = getattr(e, "result", None)
+        if isinstance(r, tuple):
+            e.result = BatchResult(batch_table(r[0]), list(r[1]), float(r[2]))
+        raise
     return BatchResult(batch_table(rows), list(wall), float(total))

@@ -5,7 +5,9 @@
 use crate::detached;
 use crate::errors::to_py_err_any;
 use navfuse_app::StopFlag;
-use navfuse_experiments::batch::{run_batch, run_case, write_tables, CaseRow, Manifest, METRICS};
+use navfuse_experiments::batch::{
+    run_batch_until, run_case, write_tables, CaseRow, Manifest, METRICS,
+};
 use pyo3::exceptions::PyIndexError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyModule};
@@ -90,21 +92,24 @@ fn batch(
     };
     let stop = StopFlag::new();
     let (r, signal) = detached(py, &stop, || -> anyhow::Result<_> {
-        let r = run_batch(&m, out.as_deref(), jobs, progress)?;
+        let r = run_batch_until(&m, out.as_deref(), jobs, progress, &stop)?;
         if let Some(o) = &out {
             write_tables(o, &r)?;
         }
         Ok(r)
     })?;
-    if let Some(sig) = signal {
-        // The batch has no stop flag: Ctrl-C is raised once it has ended.
-        return Err(sig);
-    }
     let r = r.map_err(|e| to_py_err_any(py, &e))?;
-    let rows = r
+    let rows: Vec<Py<PyDict>> = r
         .rows
         .iter()
         .map(|x| row_to_py(py, x))
         .collect::<PyResult<_>>()?;
+    if let Some(sig) = signal {
+        // Ctrl-C: no more cases were started; KeyboardInterrupt with the rows (the
+        // others "not run"), once the tables are written.
+        sig.value(py)
+            .setattr("result", (rows, r.wall_s, r.total_wall_s))?;
+        return Err(sig);
+    }
     Ok((rows, r.wall_s, r.total_wall_s))
 }

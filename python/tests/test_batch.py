@@ -96,3 +96,20 @@ def test_dask_local_cluster_equals_serial(manifest, serial_csv):
         done = client.run(lambda dask_worker: dask_worker.state.executed_count)
     assert len(done) == 2 and sum(done.values()) == SEEDS
     assert_same_rows(table, serial_csv)
+
+
+def test_ctrl_c_stops_a_batch_with_its_rows(tmp_path):
+    import _thread
+    import threading
+    p = tmp_path / "long.toml"
+    p.write_text(f'[monte_carlo]\nscenario = "{SHORT_SCENARIO.as_posix()}"\nseeds = 200\n')
+    threading.Timer(0.5, _thread.interrupt_main).start()
+    with pytest.raises(KeyboardInterrupt) as e:
+        navfuse.batch(p, jobs=1, out=tmp_path / "out")
+    r = e.value.result
+    assert len(r.table) == 200
+    not_run = r.table["error"].fillna("").str.startswith("not run").sum()
+    done = (r.table["status"] == "completed").sum()
+    assert done >= 1 and not_run >= 100 and done + not_run == 200
+    # The tables were written before the interrupt was raised.
+    assert len(pd.read_csv(tmp_path / "out" / "batch.csv")) == 200

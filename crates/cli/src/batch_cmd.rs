@@ -5,7 +5,8 @@
 use std::path::Path;
 
 use anyhow::{bail, Context, Result};
-use navfuse_experiments::batch::{run_batch, write_tables, Manifest};
+use navfuse_app::StopFlag;
+use navfuse_experiments::batch::{run_batch_until, write_tables, Manifest};
 
 /// `--out` when not given.
 pub const DEFAULT_OUT: &str = "out/batch";
@@ -27,9 +28,32 @@ pub fn main(
     }
     // Before the runs: a folder that cannot be made is found out at once.
     std::fs::create_dir_all(out).with_context(|| format!("{}: cannot create", out.display()))?;
-    let r = run_batch(&m, (!tables_only).then_some(out), jobs, !quiet)?;
+    // SIGINT / SIGTERM: no more cases are started, those under way finish, and the
+    // tables are written with the others "not run" (exit status 128 + signal).
+    let stop = StopFlag::new();
+    crate::run_cmd::install_signal_handlers(&stop)
+        .context("cannot install the SIGINT/SIGTERM handlers")?;
+    let r = run_batch_until(&m, (!tables_only).then_some(out), jobs, !quiet, &stop)?;
     write_tables(out, &r)?;
     let n = r.rows.len();
+    if let Some(signal) = r.interrupted {
+        let done = r
+            .rows
+            .iter()
+            .filter(|x| {
+                x.error
+                    .as_deref()
+                    .map_or(true, |e| !e.starts_with("not run"))
+            })
+            .count();
+        return Err(anyhow::Error::new(navfuse_app::Error::Interrupted(
+            navfuse_app::Interrupted { signal, t: None },
+        ))
+        .context(format!(
+            "navfuse batch stopped: {done} of {n} cases ran; the tables in {} hold them, the others \"not run\"",
+            out.display()
+        )));
+    }
     let failed = r.failed();
     eprintln!(
         "navfuse batch: {n} cases in {:.2} s ({:.2} cases/s, {jobs} jobs); {failed} failed; tables in {}",

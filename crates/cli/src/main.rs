@@ -225,6 +225,8 @@ enum Command {
     /// Prints a line per finished case on stderr (unless -q) and the total wall time
     /// and cases/s at the end. A failing case does not stop the others: its row says
     /// failed with the error, and the exit status is 1 once the tables are written.
+    /// Ctrl-C / SIGTERM: no more cases are started, those under way finish, the tables
+    /// are written (the others "not run"), exit status 130 / 143.
     Batch {
         /// The manifest (TOML; paths in it relative to its folder).
         manifest: PathBuf,

@@ -56,7 +56,7 @@ pub fn main(
 /// Let SIGINT and SIGTERM stop the run cleanly (`stop` set to the signal; the run ends
 /// with `navfuse_app::Interrupted`); a second one ends the process at once with
 /// status 128 + signal.
-fn install_signal_handlers(stop: &StopFlag) -> std::io::Result<()> {
+pub(crate) fn install_signal_handlers(stop: &StopFlag) -> std::io::Result<()> {
     use signal_hook::consts::{SIGINT, SIGTERM};
     let once = Arc::new(AtomicBool::new(false));
     for sig in [SIGINT, SIGTERM] {

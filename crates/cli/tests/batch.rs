@@ -296,3 +296,56 @@ fn a_failing_case_is_a_row_and_the_exit_status_says_so() {
     assert!(summary.contains("\"failed\""), "{summary}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn sigint_stops_handing_out_cases_and_the_tables_are_written() {
+    use std::io::{BufRead, BufReader};
+    let (dir, m) = setup(
+        "batch_sigint",
+        "[monte_carlo]\nscenario = \"tiny.toml\"\nseeds = 400\nname = \"mc\"\n",
+    );
+    let out = dir.join("out");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_navfuse"))
+        .args([
+            "batch",
+            s(&m),
+            "--out",
+            s(&out),
+            "--jobs",
+            "1",
+            "--tables-only",
+        ])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("start navfuse batch");
+    // After the first finished case, SIGINT.
+    let mut lines = BufReader::new(child.stderr.take().unwrap()).lines();
+    let first = lines.next().unwrap().unwrap();
+    assert!(
+        first.starts_with("[1/400] mc_seed0001: completed"),
+        "{first}"
+    );
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status();
+    assert!(kill.is_ok_and(|k| k.success()));
+    let rest: Vec<String> = lines.map_while(Result::ok).collect();
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(130), "{rest:?}");
+    assert!(
+        rest.iter().any(|l| l.contains("navfuse batch stopped")),
+        "{rest:?}"
+    );
+    let csv = std::fs::read_to_string(out.join("batch.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(rows.len(), 400);
+    let not_run = rows
+        .iter()
+        .filter(|r| r.ends_with("not run: the batch was interrupted"))
+        .count();
+    let completed = rows.iter().filter(|r| r.contains(",completed,")).count();
+    assert!(
+        completed >= 1 && not_run >= 1 && completed + not_run == 400,
+        "{csv}"
+    );
+}

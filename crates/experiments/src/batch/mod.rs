@@ -30,6 +30,7 @@ pub use metrics::{metric, METRICS};
 pub use tables::write_tables;
 
 use crate::pool::{run_indexed, Next};
+use navfuse_app::StopFlag;
 
 /// One case's result: the same for the same case whatever ran it (no wall time).
 #[derive(Clone, Debug, Serialize, PartialEq)]
@@ -68,6 +69,8 @@ pub struct BatchResult {
     pub rows: Vec<CaseRow>,
     pub wall_s: Vec<f64>,
     pub total_wall_s: f64,
+    /// Stopped by its stop flag: Some(the signal, if one asked).
+    pub interrupted: Option<Option<i32>>,
 }
 
 impl BatchResult {
@@ -106,6 +109,19 @@ pub fn run_batch(
     jobs: usize,
     progress: bool,
 ) -> Result<BatchResult> {
+    run_batch_until(m, out, jobs, progress, &StopFlag::new())
+}
+
+/// [`run_batch`] that hands out no more cases once `stop` is set (`navfuse batch`:
+/// SIGINT / SIGTERM): the cases under way finish, the others get the row "not run",
+/// and [`BatchResult::interrupted`] says so.
+pub fn run_batch_until(
+    m: &Manifest,
+    out: Option<&Path>,
+    jobs: usize,
+    progress: bool,
+    stop: &StopFlag,
+) -> Result<BatchResult> {
     if jobs == 0 {
         bail!("--jobs must be at least 1");
     }
@@ -129,18 +145,29 @@ pub fn run_batch(
             if progress {
                 eprintln!("[{k}/{n}] {}", progress_line(row, *wall));
             }
-            Next::Continue
+            if stop.requested().is_some() {
+                Next::Stop
+            } else {
+                Next::Continue
+            }
         },
     );
+    let interrupted = stop.requested();
+    let not_run = if interrupted.is_some() {
+        "not run: the batch was interrupted"
+    } else {
+        "not run"
+    };
     let (rows, wall_s) = timed
         .into_iter()
         .enumerate()
-        .map(|(i, r)| r.unwrap_or_else(|| (bare_row(m, i, Some("not run".into())), f64::NAN)))
+        .map(|(i, r)| r.unwrap_or_else(|| (bare_row(m, i, Some(not_run.into())), f64::NAN)))
         .unzip();
     Ok(BatchResult {
         rows,
         wall_s,
         total_wall_s: t0.elapsed().as_secs_f64(),
+        interrupted,
     })
 }
 
