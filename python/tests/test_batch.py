@@ -113,3 +113,43 @@ def test_ctrl_c_stops_a_batch_with_its_rows(tmp_path):
     assert done >= 1 and not_run >= 100 and done + not_run == 200
     # The tables were written before the interrupt was raised.
     assert len(pd.read_csv(tmp_path / "out" / "batch.csv")) == 200
+
+
+def test_dask_on_a_scheduler_and_workers_started_as_on_a_cluster(manifest, serial_csv, tmp_path):
+    """The `dask scheduler` and two `dask worker` processes a cluster runs, here on
+    loopback, the client connected through the scheduler file."""
+    distributed = pytest.importorskip("distributed", reason="skipped: dask.distributed not installed")
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+    import navfuse.dask
+    dask_cli = Path(sys.executable).parent / "dask"
+    if not dask_cli.exists():
+        pytest.skip(f"skipped: no dask command beside {sys.executable}")
+    sched = tmp_path / "scheduler.json"
+    log = open(tmp_path / "cluster.log", "w")
+    procs = [subprocess.Popen([str(dask_cli), "scheduler", "--host", "127.0.0.1", "--port", "0",
+                               "--no-dashboard", "--scheduler-file", str(sched)],
+                              stdout=log, stderr=log)]
+    try:
+        t0 = time.time()
+        while not sched.exists() and time.time() - t0 < 60:
+            time.sleep(0.1)
+        assert sched.exists(), (tmp_path / "cluster.log").read_text()
+        for _ in range(2):
+            procs.append(subprocess.Popen([str(dask_cli), "worker", "--scheduler-file", str(sched),
+                                           "--nthreads", "1", "--no-dashboard", "--host", "127.0.0.1"],
+                                          stdout=log, stderr=log))
+        with distributed.Client(scheduler_file=str(sched)) as client:
+            client.wait_for_workers(2, timeout=60)
+            table = navfuse.dask.run_manifest(manifest, client)
+            done = client.run(lambda dask_worker: dask_worker.state.executed_count)
+    finally:
+        for p in reversed(procs):
+            p.terminate()
+        for p in procs:
+            p.wait(timeout=30)
+        log.close()
+    assert len(done) == 2 and sum(done.values()) == SEEDS
+    assert_same_rows(table, serial_csv)
