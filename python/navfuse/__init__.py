@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import tempfile
 import warnings as _warnings
 from dataclasses import dataclass, field
@@ -331,26 +332,61 @@ def read_nav(path: Union[str, "os.PathLike[str]"]) -> pd.DataFrame:
     return read_trajectory(path, "nav")
 
 
+def _reader_arg(config: ConfigLike, section: str, keys: Dict[str, Any],
+                base_dir: Union[str, "os.PathLike[str]", None], kf_gins: bool) -> Tuple[str, str, str]:
+    """A run configuration (path, text, dict), or a data file with its section's keys
+    (``read_imu("imu.txt", format="kf-gins", rate_hz=200)``)."""
+    if isinstance(config, (str, os.PathLike)) and not isinstance(config, Mapping):
+        p = os.fspath(config)
+        is_config = p.strip().lower().endswith((".toml", ".yaml", ".yml")) or "\n" in p
+        if keys or not is_config:
+            base = os.fspath(base_dir) if base_dir is not None else os.getcwd()
+            return "inputs", _toml_dumps({section: {"file": p, **keys}}), base
+    if keys:
+        raise TypeError(f"[{section}] keys are given with a data file, not with a configuration")
+    return _config_arg(config, base_dir, kf_gins)
+
+
+def _call_reader(f: Any, kind: str, value: str, base: str, section: str) -> Any:
+    """A reader call; an error in the keywords (not in a file) names the keyword."""
+    try:
+        return f(kind, value, base)
+    except InputError as e:
+        if kind == "inputs" and (e.file or "").endswith("<reader keys>"):
+            key = e.field or ""
+            key = key[len(section) + 1:] if key.startswith(section + ".") else key
+            msg = re.sub(r"^.*?<reader keys>(:\d+)?: (key '[^']*': )?", "", e.message)
+            e.args = (f"read_{section}: keyword {key!r}: {msg}",)
+            e.message, e.file, e.line, e.field = e.args[0], None, None, key
+        raise
+
+
 def read_imu(config: ConfigLike, *, base_dir: Union[str, "os.PathLike[str]", None] = None,
-             kf_gins: bool = False) -> pd.DataFrame:
-    """The IMU of a configuration's ``[imu]`` section, read as navfuse run reads it
-    (format, units, axes, time offset): t_s, dt_s, dtheta_{x,y,z}_rad, dvel_{x,y,z}_mps
-    (increments over each interval ending at t_s). ``df.attrs["gps_week"]``: the week."""
-    kind, value, base = _config_arg(config, base_dir, kf_gins)
-    cols, week = _navfuse.read_imu(kind, value, base)
+             kf_gins: bool = False, **imu_keys: Any) -> pd.DataFrame:
+    """An IMU file, read as navfuse run reads it (format, units, axes, time offset):
+    either the ``[imu]`` of a run configuration (a path, text or a dict), or a data file
+    with the ``[imu]`` keys of docs/CONFIG.md as keywords:
+    ``read_imu("imu.txt", format="kf-gins", rate_hz=200)``,
+    ``read_imu("imu.csv", format="csv", rate_hz=100, csv={"time_col": 0, ...})``.
+    Columns: t_s, dt_s, dtheta_{x,y,z}_rad, dvel_{x,y,z}_mps (increments over each
+    interval ending at t_s). ``df.attrs["gps_week"]``: the week."""
+    kind, value, base = _reader_arg(config, "imu", imu_keys, base_dir, kf_gins)
+    cols, week = _call_reader(_navfuse.read_imu, kind, value, base, "imu")
     df = _frame(cols)
     df.attrs["gps_week"] = week
     return df
 
 
 def read_gnss(config: ConfigLike, *, base_dir: Union[str, "os.PathLike[str]", None] = None,
-              kf_gins: bool = False) -> pd.DataFrame:
-    """The GNSS fixes of a configuration's ``[gnss]`` section (KF-GINS text, .pos, NMEA,
-    CSV, ULog, UBX; RINEX and UBX raw: the single point fixes), as navfuse run reads them:
+              kf_gins: bool = False, **gnss_keys: Any) -> pd.DataFrame:
+    """GNSS fixes, read as navfuse run reads them: the ``[gnss]`` of a run configuration,
+    or a data file with the ``[gnss]`` keys as keywords
+    (``read_gnss("rover.pos", format="rtklib-pos", quality=[1, 2])``). KF-GINS text,
+    .pos, NMEA, CSV, ULog, UBX; RINEX and UBX raw: the single point fixes. Columns:
     t_s, lat_deg, lon_deg, h_m, std_{n,e,d}_m, v{n,e,d}_mps, std_v{n,e,d}_mps (NaN
     without velocity)."""
-    kind, value, base = _config_arg(config, base_dir, kf_gins)
-    cols, week, warnings = _navfuse.read_gnss(kind, value, base)
+    kind, value, base = _reader_arg(config, "gnss", gnss_keys, base_dir, kf_gins)
+    cols, week, warnings = _call_reader(_navfuse.read_gnss, kind, value, base, "gnss")
     df = _frame(cols)
     df.attrs["gps_week"] = week
     df.attrs["warnings"] = warnings

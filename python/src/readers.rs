@@ -99,6 +99,20 @@ fn read_trajectory(
     ))
 }
 
+/// The `[imu]` / `[gnss]` sections alone (a file and its keys, no run configuration).
+type InputSections = (
+    Option<navfuse_io::input::ImuSource>,
+    Option<(
+        navfuse_io::input::GnssSource,
+        navfuse_core::config::GnssOptions,
+    )>,
+);
+
+fn input_sections(py: Python<'_>, text: &str, base_dir: &Path) -> PyResult<InputSections> {
+    navfuse_io::config::parse_input_sections(text, &base_dir.join("<reader keys>"))
+        .map_err(|e| to_py_err(py, &e.into(), None))
+}
+
 /// `navfuse.read_imu`: the `[imu]` of a configuration, read as `navfuse run` reads it
 /// (units, axes, time offsets applied): t_s, dt_s, the angle and velocity increments.
 #[pyfunction]
@@ -108,10 +122,19 @@ fn read_imu(
     value: &str,
     base_dir: PathBuf,
 ) -> PyResult<(Py<PyDict>, Option<u32>)> {
-    let cfg = load_config(kind, value, &base_dir).map_err(|e| to_py_err(py, &e, None))?;
+    let imu_src = match kind {
+        "inputs" => input_sections(py, value, &base_dir)?
+            .0
+            .ok_or_else(|| PyValueError::new_err("no [imu] keys given"))?,
+        _ => {
+            load_config(kind, value, &base_dir)
+                .map_err(|e| to_py_err(py, &e, None))?
+                .imu
+        }
+    };
     let r = py.detach(
         || -> Result<(Vec<navfuse_core::ImuSample>, Option<u32>), navfuse_app::Error> {
-            let reader = navfuse_io::imu::open_imu(&cfg.imu)?;
+            let reader = navfuse_io::imu::open_imu(&imu_src)?;
             let week = reader.gps_week();
             let samples = reader.collect::<Result<Vec<_>, _>>()?;
             Ok((samples, week))
@@ -151,13 +174,21 @@ fn read_gnss(
     value: &str,
     base_dir: PathBuf,
 ) -> PyResult<(Py<PyDict>, Option<u32>, Vec<String>)> {
-    let cfg = load_config(kind, value, &base_dir).map_err(|e| to_py_err(py, &e, None))?;
-    let Some(src) = cfg.gnss.clone() else {
-        return Err(PyValueError::new_err(
-            "the configuration has no [gnss] section",
-        ));
+    let (src, systems) = match kind {
+        "inputs" => match input_sections(py, value, &base_dir)?.1 {
+            Some((src, opts)) => (src, opts.systems),
+            None => return Err(PyValueError::new_err("no [gnss] keys given")),
+        },
+        _ => {
+            let cfg = load_config(kind, value, &base_dir).map_err(|e| to_py_err(py, &e, None))?;
+            let Some(src) = cfg.gnss.clone() else {
+                return Err(PyValueError::new_err(
+                    "the configuration has no [gnss] section",
+                ));
+            };
+            (src, cfg.nav.gnss.systems.clone())
+        }
     };
-    let systems = cfg.nav.gnss.systems.clone();
     let r = py.detach(
         move || -> Result<(Vec<GnssFix>, Option<u32>, Vec<String>), navfuse_app::Error> {
             match &src.format {

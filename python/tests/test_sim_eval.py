@@ -128,3 +128,19 @@ def test_unequal_columns_are_a_value_error():
                                    "lon_deg": np.zeros(3), "h_m": np.zeros(3)},
                                   {"t_s": np.arange(3.0), "lat_deg": np.zeros(3),
                                    "lon_deg": np.zeros(3), "h_m": np.zeros(3)})
+
+
+def test_read_a_data_file_with_its_section_keys():
+    tomllib = pytest.importorskip("tomllib", reason="skipped: tomllib needs Python 3.11")
+    cfg = tomllib.loads(DEMO.read_text())
+    imu_keys = dict(cfg["imu"])
+    imu_file = DEMO.parent / imu_keys.pop("file")
+    a = navfuse.read_imu(imu_file, **imu_keys)
+    pd.testing.assert_frame_equal(a, navfuse.read_imu(DEMO), check_exact=True)
+    gnss_keys = dict(cfg["gnss"])
+    gnss_file = DEMO.parent / gnss_keys.pop("file")
+    b = navfuse.read_gnss(gnss_file, **gnss_keys)
+    pd.testing.assert_frame_equal(b, navfuse.read_gnss(DEMO), check_exact=True)
+    with pytest.raises(navfuse.InputError) as e:
+        navfuse.read_imu(imu_file, fromat="csv")
+    assert e.value.field == "fromat" and e.value.file is None and "format" in str(e.value)

@@ -925,3 +925,29 @@ fn ubx_key_errors() {
     let e = parse_ubx("file = \"g.ubx\"\nformat = \"ubx\"\nubx_source = \"nmea\"").unwrap_err();
     assert!(e.contains("ubx_source") || e.contains("nmea"), "{e}");
 }
+
+#[test]
+fn input_sections_alone_read_as_in_a_run_configuration() {
+    let p = Path::new("/data/<reader keys>");
+    let (imu, gnss) = navfuse_io::config::parse_input_sections(
+        "[imu]\nfile = \"IMU.txt\"\nformat = \"kf-gins\"\nrate_hz = 200\n\n[gnss]\nfile = \"GNSS.txt\"\nformat = \"kf-gins\"\n",
+        p,
+    )
+    .unwrap();
+    let imu = imu.unwrap();
+    assert_eq!(imu.path, Path::new("/data/IMU.txt"));
+    let (g, opts) = gnss.unwrap();
+    assert_eq!(g.path, Path::new("/data/GNSS.txt"));
+    assert!(!opts.systems.is_empty());
+    // A run configuration's other sections are not input sections.
+    let e = navfuse_io::config::parse_input_sections("[initial]\nvelocity_mps = [0, 0, 0]\n", p)
+        .unwrap_err();
+    assert!(e.to_string().contains("initial"), "{e}");
+    let e = navfuse_io::config::parse_input_sections("[imu]\nfile = \"a\"\nfromat = 1\n", p)
+        .unwrap_err();
+    assert_eq!(
+        (e.line, e.key.as_deref()),
+        (Some(3), Some("imu.fromat")),
+        "{e}"
+    );
+}

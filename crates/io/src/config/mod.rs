@@ -66,7 +66,7 @@ use kfgins::{KF_NOISE_KEYS, KF_TOP_KEYS};
 /// same way (`navfuse batch`'s manifest).
 pub use locate::{toml_error, toml_line_of};
 use paths::resolve_path;
-use root::{convert, TomlRoot};
+use root::{convert, convert_inputs, TomlInputs, TomlRoot};
 
 // ---------------------------------------------------------------------------------
 // The result
@@ -211,6 +211,28 @@ pub fn parse_toml_str(text: &str, path: &Path) -> Result<RunConfig, ConfigError>
         ConfigError::new(path, line, Some(e.key), e.msg)
     })?;
     Ok(conv.finish(path, None, Vec::new()))
+}
+
+/// The `[imu]` and `[gnss]` sections of a TOML text alone, without the rest of a run
+/// configuration (a reader of one file: Python's `navfuse.read_imu("f.txt",
+/// format = ...)`), the GNSS one with its options (systems, signals). Keys as in
+/// [`load_toml`]; other sections are errors. `path` names
+/// the text in errors and relative paths resolve against its directory.
+pub fn parse_input_sections(
+    text: &str,
+    path: &Path,
+) -> Result<
+    (
+        Option<ImuSource>,
+        Option<(GnssSource, navfuse_core::config::GnssOptions)>,
+    ),
+    ConfigError,
+> {
+    let raw: TomlInputs = toml::from_str(text).map_err(|e| toml_error(path, text, &e))?;
+    convert_inputs(&raw, &base_dir(path)).map_err(|e| {
+        let line = toml_line_of(text, &e.key);
+        ConfigError::new(path, line, Some(e.key), e.msg)
+    })
 }
 
 /// Load an unchanged KF-GINS YAML configuration (KF-GINS README section 4 keys).

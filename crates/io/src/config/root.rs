@@ -213,3 +213,38 @@ pub(super) fn to_raw(c: &RunConfig, w: &PathWriter) -> TomlRoot {
         smoother: smoother::to_toml(&c.smoother),
     }
 }
+
+/// A TOML text holding only input sections (`[imu]`, `[gnss]`): what the readers of
+/// a single file need (Python's `navfuse.read_imu` / `read_gnss` without a run
+/// configuration).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct TomlInputs {
+    #[serde(default)]
+    pub(super) imu: Option<TImu>,
+    #[serde(default)]
+    pub(super) gnss: Option<TGnss>,
+}
+
+/// [`TomlInputs`] -> the sources; relative paths resolve against `base`.
+pub(super) fn convert_inputs(
+    raw: &TomlInputs,
+    base: &Path,
+) -> KResult<(
+    Option<crate::input::ImuSource>,
+    Option<(crate::input::GnssSource, GnssOptions)>,
+)> {
+    let imu = raw
+        .imu
+        .as_ref()
+        .map(|m| imu::convert(m, base))
+        .transpose()?;
+    let gnss = match &raw.gnss {
+        Some(g) => {
+            let (src, opts, _, _) = gnss::convert(g, base, None)?;
+            Some((src, opts))
+        }
+        None => None,
+    };
+    Ok((imu, gnss))
+}
