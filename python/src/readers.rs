@@ -400,6 +400,7 @@ fn evaluate(
     let opts = ScoreOptions {
         gaps,
         lever_arm_b: lever_arm.map(|a| Vector3::new(a[0], a[1], a[2])),
+        lever_arm_name: "lever_arm",
         window,
         keep_epochs: true,
     };

@@ -18,6 +18,9 @@ pub struct ScoreOptions {
     pub gaps: Option<OutageSchedule>,
     /// `--lever-arm`: the body-frame point the reference tracks \[m\].
     pub lever_arm_b: Option<Vector3<f64>>,
+    /// What the caller calls the lever arm, for the message when the solution has no
+    /// attitude (`--lever-arm`, `lever_arm`; empty: "a lever arm").
+    pub lever_arm_name: &'static str,
     /// `--window START:END`: reference epochs kept (seconds of the solution's week).
     pub window: Option<(f64, f64)>,
     /// Keep every scored epoch's errors (`--errors`).
@@ -62,7 +65,12 @@ pub fn score(
     };
     if eval_opts.lever_arm_b.is_some() && solution.points.iter().any(|p| p.rpy.is_none()) {
         return Err(Error::Other(format!(
-            "a lever arm needs attitude in the solution, and {solution_name} ({}) has none",
+            "{} needs attitude in the solution, and {solution_name} ({}) has none",
+            if opts.lever_arm_name.is_empty() {
+                "a lever arm"
+            } else {
+                opts.lever_arm_name
+            },
             solution.format.describe()
         )));
     }

@@ -89,16 +89,10 @@ pub fn main(
             .transpose()
             .map_err(|e| anyhow::anyhow!("--gaps: {e}"))?,
         lever_arm_b: lever_arm.as_deref().map(parse_vec3).transpose()?,
+        lever_arm_name: "--lever-arm",
         window,
         keep_epochs: errors_csv.is_some(),
     };
-    if opts.lever_arm_b.is_some() && sol.points.iter().any(|p| p.rpy.is_none()) {
-        bail!(
-            "--lever-arm needs attitude in the solution, and {} ({}) has none",
-            solution.display(),
-            sol.format.describe()
-        );
-    }
     let rep = score(
         &sol,
         &solution.display().to_string(),

@@ -109,6 +109,7 @@ fn score(
     let opts = ScoreOptions {
         gaps: case.gaps.clone(),
         lever_arm_b: lever_arm,
+        lever_arm_name: "lever_arm",
         ..Default::default()
     };
     let name = if case.smooth {
