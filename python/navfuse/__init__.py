@@ -28,7 +28,8 @@ import numpy as np
 import pandas as pd
 
 from . import _navfuse
-from ._errors import InputError, Interrupted, NavfuseError, NavfuseWarning, RunError
+from ._errors import (InputError, Interrupted, NavfuseError, NavfuseWarning, RunError,
+                      UnreliableWarning)
 from ._toml import dumps as _toml_dumps
 
 __version__ = _navfuse.__version__
@@ -36,7 +37,7 @@ __version__ = _navfuse.__version__
 __all__ = [
     "run", "simulate", "evaluate", "batch", "batch_case", "batch_cases", "batch_table", "read_imu", "read_gnss", "read_rinex_obs",
     "read_nav", "read_trajectory", "RunResult", "SimResult", "EvalResult", "BatchResult",
-    "NavfuseError", "InputError", "RunError", "Interrupted", "NavfuseWarning",
+    "NavfuseError", "InputError", "RunError", "Interrupted", "NavfuseWarning", "UnreliableWarning",
 ]
 
 ConfigLike = Union[str, "os.PathLike[str]", Mapping[str, Any]]
@@ -154,7 +155,9 @@ def run(config: ConfigLike, *, out: Union[str, "os.PathLike[str]", None] = None,
     and ``e.result`` holds what was computed; the files of ``out`` are complete up to
     that epoch. The configuration's warnings and the run's plausibility warnings
     (summary.json ``warnings``: units, axes, time scales, ...) are issued with
-    ``warnings.warn`` as NavfuseWarning.
+    ``warnings.warn`` as NavfuseWarning; a result the program can tell is meaningless
+    (``status`` "unreliable", where ``navfuse run`` exits with 3) as UnreliableWarning,
+    one per reason (summary.json ``unreliable``).
     """
     kind, value, base = _config_arg(config, base_dir, kf_gins)
     out_s = os.fspath(out) if out is not None else None
@@ -181,6 +184,8 @@ def run(config: ConfigLike, *, out: Union[str, "os.PathLike[str]", None] = None,
     res = _run_result(d, out_p, warnings)
     for w in list(warnings) + list(res.summary.get("warnings") or []):
         _warnings.warn(f"navfuse: {w}", NavfuseWarning, stacklevel=2)
+    for w in res.summary.get("unreliable") or []:
+        _warnings.warn(f"navfuse: unreliable: {w}", UnreliableWarning, stacklevel=2)
     return res
 
 

@@ -53,3 +53,11 @@ class NavfuseWarning(UserWarning):
     """A plausibility finding about a run's inputs or result (the ``warnings`` of
     summary.json: units, axes, time scales, a mostly free-inertial solution, ...) or
     about its configuration."""
+
+
+class UnreliableWarning(NavfuseWarning):
+    """The run went to its end but its result is meaningless (summary.json ``status``
+    "unreliable", its reasons in ``unreliable``: almost every GNSS epoch refused, a
+    source's innovations beyond 10 sigma most of the time, IMU data ending long before
+    the GNSS). ``navfuse run`` exits with status 3 then; ``RunResult.status`` says
+    "unreliable"."""

@@ -13,8 +13,8 @@ use navfuse_io::config::RunConfig;
 use navfuse_io::imu::open_imu;
 use navfuse_io::input::{AccelUnit, GyroUnit, ImuFormat};
 
-/// Record the findings of a check (printing warnings when `warn`); its errors stop
-/// the run with their messages.
+/// Record the findings of a check (printing warnings and unreliable findings when
+/// `warn`); its errors stop the run with their messages.
 pub(crate) fn check(job: &mut JobResult, warn: bool, found: Vec<Finding>) -> Result<(), Error> {
     let mut errors = Vec::new();
     for f in found {
@@ -113,8 +113,28 @@ pub(crate) fn after_run(cfg: &RunConfig, job: &JobResult, a: &AfterRun) -> Vec<F
     if let Some(f) = &job.time_offset {
         found.extend(plausibility::time_offset_fit(f.tau0, f.rate));
     }
-    if let Some((sum, rows)) = job.summary.aiding_nis.get("gnss_position") {
-        found.extend(plausibility::fix_agreement(sum / (*rows).max(1) as f64));
+    if let (Some(g), Some(&imu_last)) = (a.gnss, Some(&a.imu.last)) {
+        if job.summary.imu_samples > 0 {
+            found.extend(plausibility::imu_ends_early(
+                imu_last,
+                g.first,
+                g.last,
+                cfg.nav.end_time,
+            ));
+        }
+    }
+    for (source, stats) in &job.summary.innovation_stats {
+        let nis = job.summary.aiding_nis.get(source);
+        found.extend(plausibility::innovation_consistency(
+            &plausibility::SourceInnovations {
+                source,
+                nis_per_row: nis.map(|(sum, rows)| sum / (*rows).max(1) as f64),
+                applied: job.summary.aiding_used.get(source).copied().unwrap_or(0),
+                stats,
+                // The fix-error states are on the position only.
+                correlated_model: *source == "gnss_position" && cfg.nav.gnss.fix_error.correlated(),
+            },
+        ));
     }
     let land = cfg.nav.nhc.mode != NhcMode::Off || cfg.nav.odometer.enabled;
     for e in &job.summary.events {

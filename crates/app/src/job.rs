@@ -61,6 +61,7 @@ pub fn run(
     let outcome = navigate(cfg, sink, opts, &mut job);
     job.wall = t_wall.elapsed();
     job.status = match &outcome {
+        Ok(()) if job.unreliable().is_some() => "unreliable",
         Ok(()) => "completed",
         Err(e) if e.interrupted().is_some() => "interrupted",
         Err(_) => "failed",
@@ -92,7 +93,8 @@ pub fn run_job(cfg: RunConfig, out_dir: &Path, progress: bool) -> Result<JobResu
 
 /// [`run_job`], printing the plausibility warnings when `warn`. Whatever happens once
 /// the output directory exists, `events.log` and `summary.json` are written there
-/// and say how the run ended (`status`: completed, failed or interrupted) and why.
+/// and say how the run ended (`status`: completed, unreliable, failed or interrupted)
+/// and why.
 pub fn run_job_opts(
     cfg: RunConfig,
     out_dir: &Path,

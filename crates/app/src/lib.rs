@@ -51,7 +51,7 @@ pub use sink::{
 };
 pub use smooth::SmootherReport;
 pub use stop::{Interrupted, StopFlag};
-pub use summary::JobResult;
+pub use summary::{JobResult, Unreliable, EXIT_UNRELIABLE};
 pub use time_offset::TimeOffsetFit;
 
 /// What a program that runs navfuse usually needs, in one `use`:

@@ -3,7 +3,10 @@
 //! files). Each check is a small function of plain values returning its findings, so
 //! that it can be tested alone. A [`Severity::Error`] means the result would be
 //! meaningless: the run is refused (before it) or reported as failed (after it, with
-//! its output kept); a [`Severity::Warning`] names the likely mistake and the
+//! its output kept); a [`Severity::Unreliable`] finding, after the run, means the
+//! program can tell its result is meaningless although it ran: every file is written,
+//! `summary.json` says `"status": "unreliable"` with the reasons and `navfuse run`
+//! exits with status 3; a [`Severity::Warning`] names the likely mistake and the
 //! configuration key to change.
 
 use nalgebra::Vector3;
@@ -33,6 +36,8 @@ pub const DEFAULT_IMU_WINDOW_S: f64 = 10.0;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Severity {
     Warning,
+    /// The run's result is kept but cannot be trusted (status "unreliable").
+    Unreliable,
     Error,
 }
 
@@ -56,8 +61,17 @@ impl Finding {
             message: message.into(),
         }
     }
+    pub fn unreliable(message: impl Into<String>) -> Self {
+        Finding {
+            severity: Severity::Unreliable,
+            message: message.into(),
+        }
+    }
     pub fn is_error(&self) -> bool {
         self.severity == Severity::Error
+    }
+    pub fn is_unreliable(&self) -> bool {
+        self.severity == Severity::Unreliable
     }
 }
 
@@ -65,6 +79,7 @@ impl fmt::Display for Finding {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self.severity {
             Severity::Warning => write!(f, "warning: {}", self.message),
+            Severity::Unreliable => write!(f, "unreliable: {}", self.message),
             Severity::Error => write!(f, "error: {}", self.message),
         }
     }
@@ -184,12 +199,173 @@ pub fn gnss_usage(u: &GnssUse) -> Vec<Finding> {
             "{other} after the run stopped or otherwise not fused ([time] end)"
         ));
     }
-    vec![Finding::warning(format!(
+    let message = format!(
         "GNSS: only {} of the {usable} epochs within the IMU data and outside outages were used ({}): the solution is mostly free inertial",
         u.used,
         why.join("; ")
+    );
+    // Almost every usable epoch refused by the filter's own test: the INS and the
+    // GNSS disagree throughout, so the output is neither (a wrong unit, axis or time
+    // scale is the usual cause; the warnings before name it).
+    let refused = usable.saturating_sub(u.before_start);
+    if usable >= MIN_EPOCHS_FOR_VERDICT
+        && (u.used as f64) < MAX_GNSS_USED_FRACTION_UNRELIABLE * usable as f64
+        && 2 * u.rejected >= refused
+    {
+        vec![Finding::unreliable(message)]
+    } else {
+        vec![Finding::warning(message)]
+    }
+}
+
+/// Below this fraction of usable GNSS epochs used, with most of the rest rejected by
+/// the filter's test, the run is unreliable.
+pub const MAX_GNSS_USED_FRACTION_UNRELIABLE: f64 = 0.05;
+/// Fewer GNSS epochs or updates than this give no verdict on the whole run.
+pub const MIN_EPOCHS_FOR_VERDICT: usize = 10;
+/// A source whose updates have an extreme NIS (per row above
+/// `navfuse_core::events::EXTREME_NIS_PER_ROW`) more often than this makes the run
+/// unreliable.
+pub const MAX_EXTREME_NIS_SHARE: f64 = 0.5;
+/// Mean NIS per row of a source outside these bounds is reported (1 for a
+/// consistent filter; the bounds leave room for a few outliers and a short run).
+pub const NIS_PER_ROW_WARN: (f64, f64) = (0.3, 3.0);
+/// Fewer updates than this give no verdict on a source's noise.
+pub const MIN_UPDATES_FOR_NOISE_VERDICT: usize = 30;
+/// Lag-1 autocorrelation of a source's normalised innovations above this (and
+/// significant) is reported as errors correlated in time.
+pub const MAX_INNOVATION_AUTOCORRELATION: f64 = 0.3;
+
+/// The configuration key that sets a source's measurement noise, for the messages.
+pub fn noise_key(source: &str) -> &'static str {
+    match source {
+        "gnss_position" => "[gnss] position_std_scale (or position_std_m)",
+        "gnss_velocity" => "[gnss] velocity_std_scale (or velocity_std_mps)",
+        "nhc" => "[nhc] std_mps",
+        "odometer" => "[odometer] std_mps",
+        "zupt" => "[zupt] velocity_std_mps",
+        "zaru" => "[zupt] angular_rate_std_dps",
+        "dual_antenna_heading" => "[heading] std_deg",
+        "course_over_ground" => "[heading] course_std_floor_deg",
+        "pseudorange" => "[gnss.tight] pseudorange_sigma_scale",
+        "doppler" | "tdcp" => "[gnss.tight] range_rate_sigma_scale",
+        "baro" => "[baro] std_m",
+        _ => "the source's noise setting",
+    }
+}
+
+/// One source's innovations after the run: how many were tried, the mean NIS per row
+/// of those applied, and their statistics (`navfuse_core::InnovationStats`).
+#[derive(Clone, Copy, Debug)]
+pub struct SourceInnovations<'a> {
+    pub source: &'a str,
+    pub nis_per_row: Option<f64>,
+    pub applied: usize,
+    pub stats: &'a navfuse_core::InnovationStats,
+    /// The model already has the source's errors time-correlated (Gauss-Markov
+    /// states), so correlated innovations mean a wrong correlation time.
+    pub correlated_model: bool,
+}
+
+/// A source's innovations against its noise setting: extreme most of the time
+/// (unreliable), a mean NIS per row far from 1 (a noise setting off by the square root
+/// of it), or clearly correlated from one update to the next (errors correlated in
+/// time where the model has them white).
+pub fn innovation_consistency(s: &SourceInnovations) -> Vec<Finding> {
+    let mut out = Vec::new();
+    let key = noise_key(s.source);
+    let st = s.stats;
+    if st.tried >= MIN_EPOCHS_FOR_VERDICT && st.extreme_share() > MAX_EXTREME_NIS_SHARE {
+        out.push(Finding::unreliable(format!(
+            "{}: {} of its {} updates ({:.0} %) had a normalised innovation squared above {:.0} per row: the data and the filter disagree by more than 10 sigma for most of the run (units, axes, lever arm or time scale of an input? the warnings before name the likely one; else {key} and [imu_noise] far too small)",
+            s.source,
+            st.extreme,
+            st.tried,
+            100.0 * st.extreme_share(),
+            navfuse_core::events::EXTREME_NIS_PER_ROW
+        )));
+        return out;
+    }
+    if s.applied >= MIN_UPDATES_FOR_NOISE_VERDICT {
+        if let Some(nis) = s.nis_per_row {
+            let (lo, hi) = NIS_PER_ROW_WARN;
+            if s.source == "gnss_position" && nis > MAX_FIX_NIS_PER_ROW {
+                // Far beyond a noise setting: the likely mistakes by name.
+                out.extend(fix_agreement(nis));
+            } else if nis > hi {
+                out.push(Finding::warning(format!(
+                    "{}: mean NIS per row {nis:.1} (1 for a consistent filter): its errors are about {:.1} times what the filter expects, so the filter is overconfident; raise {key} or the [imu_noise] values, or let `navfuse tune` estimate them",
+                    s.source,
+                    nis.sqrt()
+                )));
+            } else if nis < lo {
+                out.push(Finding::warning(format!(
+                    "{}: mean NIS per row {nis:.2} (1 for a consistent filter): its errors are about {:.1} times smaller than the filter expects, so it is underconfident and weighs this source too little; lower {key} (or the [imu_noise] values), or let `navfuse tune` estimate them",
+                    s.source,
+                    1.0 / nis.sqrt()
+                )));
+            }
+        }
+    }
+    let rows = if s.source == "gnss_position" || s.source == "gnss_velocity" {
+        3
+    } else {
+        1
+    };
+    let rho: Vec<f64> = (0..rows).filter_map(|k| st.autocorrelation(k)).collect();
+    let pairs = st.pairs.iter().copied().max().unwrap_or(0);
+    if !rho.is_empty() && pairs >= MIN_UPDATES_FOR_NOISE_VERDICT {
+        let mean = rho.iter().sum::<f64>() / rho.len() as f64;
+        // Significant: beyond 3 standard errors of a white sequence (1/sqrt(n)).
+        let significant = mean > (3.0 / (pairs as f64).sqrt()).max(MAX_INNOVATION_AUTOCORRELATION);
+        if significant {
+            let dt = st.mean_pair_dt().unwrap_or(f64::NAN);
+            let what = if s.correlated_model {
+                "the fix errors are correlated longer than the fix-error model allows ([gnss] error_corr_time_s, error_corr_fraction)"
+            } else {
+                "the errors are correlated in time where the model has them white"
+            };
+            let fix = match s.source {
+                "gnss_position" | "gnss_velocity" if !s.correlated_model => {
+                    "model them as Gauss-Markov ([gnss] error_corr_time_s)"
+                }
+                "gnss_position" | "gnss_velocity" => "lengthen [gnss] error_corr_time_s",
+                _ => "raise {key} so that the correlated errors weigh less",
+            };
+            out.push(Finding::warning(format!(
+                "{}: its innovations are correlated from one update to the next (lag-1 autocorrelation {mean:.2} at {dt:.2} s over {pairs} pairs; about 0 when the noise model fits the data): {what}, or the [imu_noise] values are off; {}, or let `navfuse tune` estimate the noise model",
+                s.source,
+                fix.replace("{key}", key)
+            )));
+        }
+    }
+    out
+}
+
+/// The IMU data end well before the GNSS data (and the configured end): the run
+/// covers only part of what it was given (a truncated file, a logger that stopped).
+pub fn imu_ends_early(
+    imu_last: f64,
+    gnss_first: f64,
+    gnss_last: f64,
+    end_time: Option<f64>,
+) -> Vec<Finding> {
+    let wanted_end = end_time.map_or(gnss_last, |e| e.min(gnss_last));
+    let missing = wanted_end - imu_last;
+    let span = (gnss_last - gnss_first).max(0.0);
+    if !(missing > MIN_IMU_SHORTFALL_S.max(MIN_IMU_SHORTFALL_FRACTION * span)) {
+        return Vec::new();
+    }
+    vec![Finding::unreliable(format!(
+        "the IMU data end at t = {imu_last:.3}, {missing:.1} s ({:.0} % of the GNSS span) before the GNSS data (t = {wanted_end:.3}): the IMU file was cut short (a truncated copy, a logger that stopped, a file still being written?); the solution covers only the IMU's part (set [time] end to accept that)",
+        100.0 * missing / span.max(1e-9)
     ))]
 }
+
+/// The IMU may end this long \[s\] (and this fraction of the GNSS span) before the
+/// GNSS before the run is unreliable.
+pub const MIN_IMU_SHORTFALL_S: f64 = 30.0;
+pub const MIN_IMU_SHORTFALL_FRACTION: f64 = 0.1;
 
 /// The fitted GNSS-IMU time offset \[s\] and rate \[s/s\].
 pub fn time_offset_fit(tau_s: f64, rate: f64) -> Vec<Finding> {

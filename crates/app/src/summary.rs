@@ -19,7 +19,8 @@ pub struct JobResult {
     pub odometer_samples: usize,
     pub heading_records: usize,
     pub time_offset: Option<TimeOffsetFit>,
-    /// How the run ended: "completed", "failed" or "interrupted" (summary.json).
+    /// How the run ended (summary.json): "completed", "unreliable" (ran to its end but
+    /// the result is meaningless: the findings say why), "failed" or "interrupted".
     pub status: &'static str,
     /// Why it failed or stopped.
     pub error: Option<String>,
@@ -35,7 +36,42 @@ pub struct JobResult {
     pub smoother: Option<crate::SmootherReport>,
 }
 
+/// Exit status of `navfuse run` (and `navfuse batch`) when the run went to its end but
+/// its result is meaningless (`status` "unreliable" in summary.json).
+pub const EXIT_UNRELIABLE: u8 = 3;
+
+/// A run that went to its end with a result the program can tell is meaningless: its
+/// files are written, summary.json says `"status": "unreliable"` and why.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Unreliable {
+    /// Why (the unreliable findings).
+    pub reasons: Vec<String>,
+}
+
+impl std::fmt::Display for Unreliable {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "the run's result is unreliable (its files are written; summary.json \"unreliable\"): {}",
+            self.reasons.join("; ")
+        )
+    }
+}
+
+impl std::error::Error for Unreliable {}
+
 impl JobResult {
+    /// Why the result is unreliable, when it is ([`Unreliable`]).
+    pub fn unreliable(&self) -> Option<Unreliable> {
+        let reasons: Vec<String> = self
+            .findings
+            .iter()
+            .filter(|f| f.is_unreliable())
+            .map(|f| f.message.clone())
+            .collect();
+        (!reasons.is_empty()).then_some(Unreliable { reasons })
+    }
+
     pub(crate) fn empty() -> Self {
         JobResult {
             summary: RunSummary::default(),
@@ -70,6 +106,7 @@ impl JobResult {
             "error": self.error,
             "warnings": with(plausibility::Severity::Warning),
             "errors": with(plausibility::Severity::Error),
+            "unreliable": with(plausibility::Severity::Unreliable),
             "last_output_t": self.last_output_t,
             "imu_samples": s.imu_samples,
             "t_first": s.first_t,
@@ -94,6 +131,12 @@ impl JobResult {
             "heading_records": self.heading_records,
             "aiding_used": s.aiding_used,
             "aiding_rejected": s.aiding_rejected,
+            "innovation_stats": s.innovation_stats.iter().map(|(k, st)| (*k, serde_json::json!({
+                "tried": st.tried,
+                "extreme_nis": st.extreme,
+                "lag1_autocorrelation": (0..3).map(|i| st.autocorrelation(i)).collect::<Vec<_>>(),
+                "mean_interval_s": st.mean_pair_dt(),
+            }))).collect::<std::collections::BTreeMap<_, _>>(),
             "nis_per_row": s.aiding_nis.iter().map(|(k, (sum, rows))| (*k, sum / (*rows).max(1) as f64)).collect::<std::collections::BTreeMap<_, _>>(),
             "static_s": s.static_s,
             "odometer_scale": s.odometer_scale.map(|(k, sd)| serde_json::json!({

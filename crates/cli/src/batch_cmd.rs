@@ -67,5 +67,15 @@ pub fn main(
             out.join("batch.csv").display()
         );
     }
+    let unreliable = r.unreliable();
+    if unreliable > 0 {
+        // Exit status 3, as `navfuse run` with an unreliable result.
+        return Err(anyhow::Error::new(navfuse_app::Unreliable {
+            reasons: vec![format!(
+                "{unreliable} of {n} cases ran with an unreliable result (status \"unreliable\" in {}; each case's summary.json says why)",
+                out.join("batch.csv").display()
+            )],
+        }));
+    }
     Ok(())
 }

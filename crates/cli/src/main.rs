@@ -65,7 +65,11 @@ enum Command {
     /// lever arm in cm, UTC tags, a wide time-offset prior) naming the key to change,
     /// and refuse what would be meaningless (GNSS not overlapping the IMU, a week
     /// mismatch, an empty input, a start after the data): exit status 1. Failed runs
-    /// still write events.log and summary.json (`status`, `error`). SIGINT / SIGTERM
+    /// still write events.log and summary.json (`status`, `error`). A run that goes to
+    /// its end with a result the program can tell is meaningless (almost every GNSS
+    /// epoch refused, a source's innovations beyond 10 sigma most of the time, IMU data
+    /// ending long before the GNSS) writes every file, marks summary.json `status`
+    /// "unreliable" with the reasons (`unreliable`) and exits with status 3. SIGINT / SIGTERM
     /// stop the run with every output at the same epoch and summary.json marked
     /// "interrupted", exit status 130 / 143.
     Run {
@@ -224,7 +228,8 @@ enum Command {
     /// bytes whatever --jobs) and DIR/batch_timing.csv (each case's wall time).
     /// Prints a line per finished case on stderr (unless -q) and the total wall time
     /// and cases/s at the end. A failing case does not stop the others: its row says
-    /// failed with the error, and the exit status is 1 once the tables are written.
+    /// failed with the error, and the exit status is 1 once the tables are written (3
+    /// when none failed but some ran with status "unreliable", as `navfuse run`).
     /// Ctrl-C / SIGTERM: no more cases are started, those under way finish, the tables
     /// are written (the others "not run"), exit status 130 / 143.
     Batch {
@@ -504,6 +509,9 @@ fn main() -> ExitCode {
                 .and_then(navfuse_app::Error::interrupted);
             match interrupted {
                 Some(i) => ExitCode::from(i.exit_status()),
+                None if e.downcast_ref::<navfuse_app::Unreliable>().is_some() => {
+                    ExitCode::from(navfuse_app::EXIT_UNRELIABLE)
+                }
                 None => ExitCode::FAILURE,
             }
         }

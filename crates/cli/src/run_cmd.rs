@@ -50,7 +50,11 @@ pub fn main(
     if !quiet {
         eprintln!("{}", job.summary_line());
     }
-    Ok(())
+    // Every file is written, but the result is meaningless: say so by the exit status.
+    match job.unreliable() {
+        Some(u) => Err(anyhow::Error::new(u)),
+        None => Ok(()),
+    }
 }
 
 /// Let SIGINT and SIGTERM stop the run cleanly (`stop` set to the signal; the run ends

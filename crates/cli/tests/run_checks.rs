@@ -81,7 +81,28 @@ fn run(config: &Path) -> Outcome {
 }
 
 impl Outcome {
-    fn expect(&self, code: i32, status: &str, message: &str) {
+    /// An unreliable run: every output file written with the whole run in it (the
+    /// demo's 180 s at 10 Hz less the GNSS it lacks), the reasons in summary.json.
+    fn expect_unreliable_with_files(&self) {
+        self.expect_unreliable_with_rows(1_700);
+    }
+
+    fn expect_unreliable_with_rows(&self, min_rows: usize) {
+        let reasons = self.summary["unreliable"].as_array().unwrap();
+        assert!(!reasons.is_empty(), "{}", self.summary);
+        assert!(self.stderr.contains("navfuse: unreliable: "), "{}", self.stderr);
+        for f in ["solution.nav", "solution.csv", "innovations.csv", "events.log"] {
+            let len = std::fs::metadata(self.out.join(f)).map_or(0, |m| m.len());
+            assert!(len > 0, "{f} missing or empty");
+        }
+        let rows = std::fs::read_to_string(self.out.join("solution.nav"))
+            .unwrap()
+            .lines()
+            .count();
+        assert!(rows > min_rows, "solution.nav has {rows} rows");
+    }
+
+    fn expect(&self, code: i32, status: &str, message: &str) -> &Self {
         assert_eq!(
             self.code,
             Some(code),
@@ -99,6 +120,7 @@ impl Outcome {
             .summary
             .to_string()
             .contains(&message.replace('"', "\\\"")));
+        self
     }
 }
 
@@ -148,21 +170,27 @@ fn imu_unit_and_axis_mistakes_are_named() {
         demo_config(|t| t.replace("gyro_unit = \"deg\"", "gyro_unit = \"rad\"")),
         None,
     );
-    run(&gyro).expect(
-        0,
-        "completed",
-        "gyro in deg/s declared as rad/s? set [imu.csv] gyro_unit = \"deg\"",
-    );
+    // Each mistake is named, and the result it gives is meaningless: every file is
+    // written, but the run says "unreliable" and exits with 3.
+    run(&gyro)
+        .expect(
+            3,
+            "unreliable",
+            "gyro in deg/s declared as rad/s? set [imu.csv] gyro_unit = \"deg\"",
+        )
+        .expect_unreliable_with_files();
     let accel = case(
         "accel-m",
         demo_config(|t| t.replace("accel_unit = \"g\"", "accel_unit = \"m\"")),
         None,
     );
-    run(&accel).expect(
-        0,
-        "completed",
-        "accelerometer in g declared as m/s²? set [imu.csv] accel_unit = \"g\"",
-    );
+    run(&accel)
+        .expect(
+            3,
+            "unreliable",
+            "accelerometer in g declared as m/s²? set [imu.csv] accel_unit = \"g\"",
+        )
+        .expect_unreliable_with_files();
     let swap = case(
         "swapped",
         demo_config(|t| {
@@ -173,10 +201,11 @@ fn imu_unit_and_axis_mistakes_are_named() {
     );
     let o = run(&swap);
     o.expect(
-        0,
-        "completed",
+        3,
+        "unreliable",
         "accelerometer and gyro columns swapped? set [imu.csv] accel_cols / gyro_cols",
     );
+    o.expect_unreliable_with_files();
     assert!(
         !o.stderr.contains("declared as"),
         "one cause, not three:\n{}",
@@ -188,7 +217,11 @@ fn imu_unit_and_axis_mistakes_are_named() {
 fn gnss_in_utc_is_named() {
     // UTC labelled as GPS time: the tags are 18 s early.
     let cfg = case("utc", demo_config(|t| t + "\n"), Some(shifted_pos(-18)));
-    run(&cfg).expect(0, "completed", "18 s: UTC vs GPST?");
+    // Named; and with GNSS 18 s off the result is meaningless (the run ends with the
+    // GNSS, 18 s early).
+    run(&cfg)
+        .expect(3, "unreliable", "18 s: UTC vs GPST?")
+        .expect_unreliable_with_rows(1_600);
 }
 
 #[test]
@@ -269,11 +302,14 @@ fn lever_arm_in_cm_and_wide_time_offset_prior_are_warned() {
         }),
         None,
     );
-    run(&cfg).expect(
-        0,
-        "completed",
-        "[gnss] lever_arm_m = [20, -5, -35] is 40.6 m long: given in cm or mm?",
-    );
+    // Named; and a 40 m lever arm makes the result meaningless.
+    run(&cfg)
+        .expect(
+            3,
+            "unreliable",
+            "[gnss] lever_arm_m = [20, -5, -35] is 40.6 m long: given in cm or mm?",
+        )
+        .expect_unreliable_with_files();
     let cfg = case(
         "prior-30",
         demo_config(|t| t.replace("std_s = 0.5", "std_s = 30.0")),

@@ -244,6 +244,88 @@ impl UpdateKind {
     }
 }
 
+/// A normalised innovation squared per row above this is "extreme": the filter and the
+/// data disagree by more than 10 sigma (`InnovationStats::extreme`).
+pub const EXTREME_NIS_PER_ROW: f64 = 100.0;
+
+/// Consecutive updates of a source further apart than this \[s\] do not enter the
+/// lag-1 autocorrelation of its innovations (an outage between them).
+pub const AUTOCORR_MAX_GAP_S: f64 = 10.0;
+
+/// Per-source statistics of the innovations of every update tried (applied or
+/// rejected by its gate), for the consistency checks after a run: how often the NIS is
+/// extreme, and the lag-1 autocorrelation of each row's normalised innovation
+/// e = y / sqrt(S_ii). For a filter whose model matches the data the innovations are
+/// white (REFERENCES \[BS\] §5.4: the innovation sequence of an optimal filter is
+/// white with covariance S), so a clear positive autocorrelation says the errors are
+/// time-correlated where the model has them white.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct InnovationStats {
+    /// Updates tried (applied or rejected; not singular ones).
+    pub tried: usize,
+    /// Of them, those with NIS per row above [`EXTREME_NIS_PER_ROW`].
+    pub extreme: usize,
+    /// Per row (the first three): sum of e_k e_{k-1}, of e_k², of e_{k-1}² over pairs
+    /// of consecutive updates of the same number of rows within
+    /// [`AUTOCORR_MAX_GAP_S`], and the number of pairs.
+    pub lag_sum: [f64; 3],
+    pub sq_sum: [f64; 3],
+    pub sq_prev_sum: [f64; 3],
+    pub pairs: [usize; 3],
+    /// Sum of the intervals between those pairs \[s\].
+    pub pair_dt_sum: f64,
+    /// The previous update's time, rows and normalised innovations.
+    prev: Option<(f64, usize, [f64; 3])>,
+}
+
+impl InnovationStats {
+    /// Note one update tried at time `t` with innovation `y`, its innovation variances
+    /// `s_diag` (first three rows) and NIS.
+    pub fn note(&mut self, t: f64, y: &[f64], s_diag: &[f64; 3], nis: f64) {
+        let rows = y.len();
+        self.tried += 1;
+        if nis > EXTREME_NIS_PER_ROW * rows.max(1) as f64 {
+            self.extreme += 1;
+        }
+        let mut e = [f64::NAN; 3];
+        for (k, (v, s)) in y.iter().zip(s_diag).enumerate() {
+            e[k] = if *s > 0.0 { v / s.sqrt() } else { f64::NAN };
+        }
+        if let Some((t0, r0, e0)) = self.prev {
+            if r0 == rows && (t - t0).abs() <= AUTOCORR_MAX_GAP_S && t != t0 {
+                self.pair_dt_sum += (t - t0).abs();
+                for k in 0..rows.min(3) {
+                    if e[k].is_finite() && e0[k].is_finite() {
+                        self.lag_sum[k] += e[k] * e0[k];
+                        self.sq_sum[k] += e[k] * e[k];
+                        self.sq_prev_sum[k] += e0[k] * e0[k];
+                        self.pairs[k] += 1;
+                    }
+                }
+            }
+        }
+        self.prev = Some((t, rows, e));
+    }
+
+    /// Lag-1 autocorrelation of row `k`'s normalised innovation (None with fewer than
+    /// 10 pairs).
+    pub fn autocorrelation(&self, k: usize) -> Option<f64> {
+        let d = (self.sq_sum[k] * self.sq_prev_sum[k]).sqrt();
+        (self.pairs[k] >= 10 && d > 0.0).then(|| self.lag_sum[k] / d)
+    }
+
+    /// Mean interval between the updates paired for the autocorrelation \[s\].
+    pub fn mean_pair_dt(&self) -> Option<f64> {
+        let n = self.pairs.iter().copied().max().unwrap_or(0);
+        (n > 0).then(|| self.pair_dt_sum / n as f64)
+    }
+
+    /// Share of the updates tried with an extreme NIS.
+    pub fn extreme_share(&self) -> f64 {
+        self.extreme as f64 / self.tried.max(1) as f64
+    }
+}
+
 /// Counts for the end-of-run summary.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct RunSummary {
@@ -265,6 +347,8 @@ pub struct RunSummary {
     /// Per aiding source: sums of the normalised innovation squared of the applied
     /// updates and of their rows (mean NIS per row = 1 for a consistent filter).
     pub aiding_nis: BTreeMap<&'static str, (f64, usize)>,
+    /// Per aiding source: how its innovations behaved ([`InnovationStats`]).
+    pub innovation_stats: BTreeMap<&'static str, InnovationStats>,
     /// Time spent static according to the detector \[s\].
     pub static_s: f64,
     /// Final GNSS-IMU time offset at `last_t` and its 1-sigma \[s\], when estimated.

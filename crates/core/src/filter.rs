@@ -11,10 +11,21 @@ use nalgebra::{DMatrix, DVector};
 /// Result of one measurement update.
 #[derive(Clone, Debug)]
 pub enum UpdateOutcome {
-    /// Accepted; the error-state estimate to feed back (x_est - x_true).
-    Applied { dx: DVector<f64>, nis: f64 },
-    /// Rejected by the innovation gate: normalised innovation squared and threshold.
-    Rejected { nis: f64, threshold: f64 },
+    /// Accepted; the error-state estimate to feed back (x_est - x_true), the
+    /// normalised innovation squared and the innovation variances S_ii of the first
+    /// three rows.
+    Applied {
+        dx: DVector<f64>,
+        nis: f64,
+        s_diag: [f64; 3],
+    },
+    /// Rejected by the innovation gate: normalised innovation squared, threshold and
+    /// S_ii of the first three rows.
+    Rejected {
+        nis: f64,
+        threshold: f64,
+        s_diag: [f64; 3],
+    },
     /// Innovation covariance not positive definite (measurement dropped).
     Singular,
 }
@@ -82,9 +93,17 @@ impl Eskf {
         if !nis.is_finite() {
             return UpdateOutcome::Singular;
         }
+        let mut s_diag = [f64::NAN; 3];
+        for (k, v) in s_diag.iter_mut().enumerate().take(s.nrows()) {
+            *v = s[(k, k)];
+        }
         if let Some(t) = gate {
             if nis > t {
-                return UpdateOutcome::Rejected { nis, threshold: t };
+                return UpdateOutcome::Rejected {
+                    nis,
+                    threshold: t,
+                    s_diag,
+                };
             }
         }
         // K = P H^T S^-1, computed as (S^-1 H P)^T since S is symmetric.
@@ -99,7 +118,7 @@ impl Eskf {
         matmul(&mut self.p, &kr, &k, true, false);
         matmul(&mut self.p, &self.tmp, &i_kh, true, true);
         self.symmetrize();
-        UpdateOutcome::Applied { dx, nis }
+        UpdateOutcome::Applied { dx, nis, s_diag }
     }
 
     /// Kalman gain K = P H^T (H P H^T + R)^-1 of a measurement, without updating
@@ -192,7 +211,7 @@ mod tests {
         let r = DMatrix::from_element(1, 1, 1.0);
         let y = DVector::from_vec(vec![2.0]);
         match f.update(&y, &h, &r, None) {
-            UpdateOutcome::Applied { dx, nis } => {
+            UpdateOutcome::Applied { dx, nis, .. } => {
                 assert!((dx[0] - 1.6).abs() < 1e-12);
                 assert!(dx[1].abs() < 1e-12);
                 assert!((nis - 0.8).abs() < 1e-12);

@@ -33,7 +33,9 @@ pub mod time;
 pub mod types;
 
 pub use aiding::source::{AidingSource, Fuser, Handled};
-pub use events::{AidStatus, Event, InnovationRow, RunSummary, SolutionState, UpdateKind};
+pub use events::{
+    AidStatus, Event, InnovationRow, InnovationStats, RunSummary, SolutionState, UpdateKind,
+};
 pub use nav::backward::{run_backward, BackwardStart};
 pub use nav::ins_filter::{BlockProcess, BlockSpec, Fused};
 pub use nav::navigator::{NavError, Navigator};

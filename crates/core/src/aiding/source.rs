@@ -304,6 +304,13 @@ impl Fuser<'_> {
         st.innovation.clear();
         st.innovation.extend(lin.y.iter());
         let outcome = self.ins.update(lin, gate);
+        if let UpdateOutcome::Applied { nis, s_diag, .. }
+        | UpdateOutcome::Rejected { nis, s_diag, .. } = &outcome
+        {
+            let stats = self.record.innovation_stats.entry(name).or_default();
+            // A down-weighted row counts with the NIS of its reported R.
+            stats.note(t, lin.y.as_slice(), s_diag, nis_stat.unwrap_or(*nis));
+        }
         if let Some(log) = self.ins.innovations.as_mut() {
             let mut innovation = [f64::NAN; 3];
             for (v, y) in innovation.iter_mut().zip(lin.y.iter()) {
@@ -327,7 +334,7 @@ impl Fuser<'_> {
             });
         }
         match outcome {
-            UpdateOutcome::Applied { dx, nis } => {
+            UpdateOutcome::Applied { dx, nis, .. } => {
                 let nis = nis_stat.unwrap_or(nis);
                 let e = self.record.aiding_nis.entry(name).or_default();
                 *e = (e.0 + nis, e.1 + lin.y.len());
@@ -339,7 +346,7 @@ impl Fuser<'_> {
                 st.last_fused_t = Some(t);
                 Fused::Applied(dx)
             }
-            UpdateOutcome::Rejected { nis, threshold } => {
+            UpdateOutcome::Rejected { nis, threshold, .. } => {
                 *self.record.aiding_rejected.entry(name).or_default() += 1;
                 st.rejected += 1;
                 st.nis = Some(nis);

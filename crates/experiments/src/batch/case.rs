@@ -18,6 +18,8 @@ use crate::work::WorkDir;
 
 /// What a case gave: its output epochs and its figures.
 pub(crate) struct Outcome {
+    /// The run's status ("completed" or "unreliable").
+    pub status: &'static str,
     pub epochs: usize,
     pub metrics: Vec<(String, f64)>,
 }
@@ -128,6 +130,7 @@ fn score(
 
 fn outcome(nav: &Navigated, report: Option<&EvalReport>) -> Outcome {
     Outcome {
+        status: nav.job.status,
         epochs: nav.rows.len(),
         metrics: figures(&nav.job, report),
     }

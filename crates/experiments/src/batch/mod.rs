@@ -40,7 +40,8 @@ pub struct CaseRow {
     pub name: String,
     /// The simulator's seed (Monte Carlo cases).
     pub seed: Option<u64>,
-    /// "completed" or "failed".
+    /// "completed", "unreliable" (ran, but its result is meaningless: summary.json
+    /// says why) or "failed".
     pub status: String,
     /// Why it failed.
     pub error: Option<String>,
@@ -56,9 +57,14 @@ impl CaseRow {
         metric(&self.metrics, name)
     }
 
-    /// Whether the case failed.
+    /// Whether the case failed (did not run to its end).
     pub fn failed(&self) -> bool {
-        self.status != "completed"
+        self.status != "completed" && self.status != "unreliable"
+    }
+
+    /// Whether the case ran but its result is unreliable.
+    pub fn unreliable(&self) -> bool {
+        self.status == "unreliable"
     }
 }
 
@@ -78,6 +84,11 @@ impl BatchResult {
     pub fn failed(&self) -> usize {
         self.rows.iter().filter(|r| r.failed()).count()
     }
+
+    /// The number of cases that ran with an unreliable result.
+    pub fn unreliable(&self) -> usize {
+        self.rows.iter().filter(|r| r.unreliable()).count()
+    }
 }
 
 /// Run case `index` of `m`: its files go to `out/<name>` (exactly what `navfuse run
@@ -91,6 +102,7 @@ pub fn run_case(m: &Manifest, index: usize, out: Option<&Path>) -> CaseRow {
     let c = &m.cases[index];
     match case::run(c, case::case_dir(out, c).as_deref()) {
         Ok(o) => CaseRow {
+            status: o.status.to_string(),
             epochs: o.epochs,
             metrics: o.metrics,
             ..bare_row(m, index, None)

@@ -90,7 +90,8 @@ fn to_json(rows: &[CaseRow]) -> Value {
         .collect();
     json!({
         "cases": rows.len(),
-        "failed": rows.iter().filter(|r| r["status"] != "completed").count(),
+        "failed": rows.iter().filter(|r| r["status"] != "completed" && r["status"] != "unreliable").count(),
+        "unreliable": rows.iter().filter(|r| r["status"] == "unreliable").count(),
         "metrics": legend,
         "rows": rows,
     })
