@@ -353,7 +353,8 @@ pub fn imu_ends_early(
     let wanted_end = end_time.map_or(gnss_last, |e| e.min(gnss_last));
     let missing = wanted_end - imu_last;
     let span = (gnss_last - gnss_first).max(0.0);
-    if !(missing > MIN_IMU_SHORTFALL_S.max(MIN_IMU_SHORTFALL_FRACTION * span)) {
+    let allowed = MIN_IMU_SHORTFALL_S.max(MIN_IMU_SHORTFALL_FRACTION * span);
+    if missing.is_nan() || missing <= allowed {
         return Vec::new();
     }
     vec![Finding::unreliable(format!(

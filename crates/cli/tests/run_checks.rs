@@ -90,8 +90,17 @@ impl Outcome {
     fn expect_unreliable_with_rows(&self, min_rows: usize) {
         let reasons = self.summary["unreliable"].as_array().unwrap();
         assert!(!reasons.is_empty(), "{}", self.summary);
-        assert!(self.stderr.contains("navfuse: unreliable: "), "{}", self.stderr);
-        for f in ["solution.nav", "solution.csv", "innovations.csv", "events.log"] {
+        assert!(
+            self.stderr.contains("navfuse: unreliable: "),
+            "{}",
+            self.stderr
+        );
+        for f in [
+            "solution.nav",
+            "solution.csv",
+            "innovations.csv",
+            "events.log",
+        ] {
             let len = std::fs::metadata(self.out.join(f)).map_or(0, |m| m.len());
             assert!(len > 0, "{f} missing or empty");
         }
