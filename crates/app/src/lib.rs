@@ -37,6 +37,7 @@ pub mod spp;
 mod stop;
 mod summary;
 mod time_offset;
+pub mod tune;
 pub mod ubx_input;
 
 pub use error::Error;

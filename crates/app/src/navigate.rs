@@ -21,25 +21,34 @@ use navfuse_io::nav::SolutionRecord;
 /// The most rows per second of states.csv \[Hz\].
 const STATES_RATE_HZ: f64 = 10.0;
 
-/// Read, check, navigate, push the solution into `sink`; fills `job` as it goes.
-pub(crate) fn navigate(
+/// A run's inputs, read and checked, with the time offset estimated: what the
+/// navigation (and the noise tuning) starts from.
+pub(crate) struct Prepared {
+    pub cfg: RunConfig,
+    /// The IMU reader after its first sample, and that sample.
+    pub reader: navfuse_io::imu::ImuReader,
+    pub first: navfuse_core::ImuSample,
+    pub imu_week: Option<u32>,
+    /// The week output times count from.
+    pub week: u32,
+    /// The merged, time-sorted measurements.
+    pub measurements: Vec<navfuse_core::Measurement>,
+    /// GNSS epoch times (fixes, or raw epochs with tight coupling).
+    pub gnss_times: Vec<f64>,
+    pub gnss_span: Option<Span>,
+    pub run_start: f64,
+}
+
+/// Read the inputs, check them, merge the measurements and, with
+/// `estimate_time_offset`, estimate the time offset (held fixed in the configuration
+/// afterwards); fills `job`.
+pub(crate) fn prepare(
     mut cfg: RunConfig,
-    sink: &mut dyn SolutionSink,
     opts: &RunOptions,
     job: &mut JobResult,
-) -> Result<(), Error> {
+    estimate_time_offset: bool,
+) -> Result<Prepared, Error> {
     let warn = opts.warn;
-    if cfg.smoother.enabled
-        && matches!(
-            cfg.nav.gnss.fusion,
-            navfuse_core::config::GnssFusion::SixState { .. }
-        )
-    {
-        return Err(Error::Other(format!(
-            "{}: [smoother] (or --smooth) works on the error-state filter; gnss.fusion = \"six_state\" cannot be smoothed: use the default fusion or turn smoothing off",
-            cfg.source_path.display()
-        )));
-    }
     let inputs::Inputs {
         mut reader,
         imu_week,
@@ -76,6 +85,7 @@ pub(crate) fn navigate(
     // Configuration and input checks before the run.
     let found = checks::before_run(&cfg, gnss_epochs, gnss_skipped, last_gnss_t);
     check(job, warn, found)?;
+    let first_fix = fixes.first().map(|f| f.lla);
     let measurements = navfuse_core::merge_more(
         navfuse_core::merge_raw_epochs(
             navfuse_core::merge_measurements(&fixes, &odometer, &heading),
@@ -94,6 +104,72 @@ pub(crate) fn navigate(
             )))
         }
     };
+    let imu_span = Span {
+        file: cfg.imu.path.display().to_string(),
+        first: first.t,
+        last: f64::INFINITY,
+        week: imu_week,
+    };
+    if let Some(g) = &gnss_span {
+        check(job, warn, plausibility::time_overlap(&imu_span, g))?;
+    }
+    let found = checks::imu_window(&cfg, first_fix);
+    check(job, warn, found)?;
+    let run_start = if cfg.nav.start_time.is_finite() {
+        cfg.nav.start_time.max(first.t)
+    } else {
+        first.t
+    };
+    cfg.resolve_relative_outages(run_start);
+
+    if estimate_time_offset {
+        let fit = time_offset::estimate(&mut cfg, &measurements, gnss_week, opts, job)?;
+        job.time_offset = fit;
+    }
+    Ok(Prepared {
+        cfg,
+        reader,
+        first,
+        imu_week,
+        week,
+        measurements,
+        gnss_times,
+        gnss_span,
+        run_start,
+    })
+}
+
+/// Read, check, navigate, push the solution into `sink`; fills `job` as it goes.
+pub(crate) fn navigate(
+    cfg: RunConfig,
+    sink: &mut dyn SolutionSink,
+    opts: &RunOptions,
+    job: &mut JobResult,
+) -> Result<(), Error> {
+    let warn = opts.warn;
+    if cfg.smoother.enabled
+        && matches!(
+            cfg.nav.gnss.fusion,
+            navfuse_core::config::GnssFusion::SixState { .. }
+        )
+    {
+        return Err(Error::Other(format!(
+            "{}: [smoother] (or --smooth) works on the error-state filter; gnss.fusion = \"six_state\" cannot be smoothed: use the default fusion or turn smoothing off",
+            cfg.source_path.display()
+        )));
+    }
+    let Prepared {
+        cfg,
+        mut reader,
+        first,
+        imu_week,
+        week,
+        measurements,
+        gnss_times,
+        gnss_span,
+        run_start,
+    } = prepare(cfg, opts, job, true)?;
+    let last_gnss_t = gnss_times.last().copied();
     let first_t = first.t;
     let imu_file = cfg.imu.path.display().to_string();
     let imu_span = |last: f64| Span {
@@ -102,24 +178,6 @@ pub(crate) fn navigate(
         last,
         week: imu_week,
     };
-    if let Some(g) = &gnss_span {
-        check(
-            job,
-            warn,
-            plausibility::time_overlap(&imu_span(f64::INFINITY), g),
-        )?;
-    }
-    let found = checks::imu_window(&cfg, fixes.first().map(|f| f.lla));
-    check(job, warn, found)?;
-    let run_start = if cfg.nav.start_time.is_finite() {
-        cfg.nav.start_time.max(first_t)
-    } else {
-        first_t
-    };
-    cfg.resolve_relative_outages(run_start);
-
-    let fit = time_offset::estimate(&mut cfg, &measurements, gnss_week, opts, job)?;
-    job.time_offset = fit;
 
     let monitor_on = cfg.nav.integrity.enabled;
     let layout = OutputLayout {
@@ -248,6 +306,7 @@ pub(crate) fn navigate(
                 false => None,
             },
             on_innovations: Some(&mut on_innovations),
+            on_updates: None,
         },
     );
     let sink = sink.into_inner();

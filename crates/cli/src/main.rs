@@ -16,6 +16,7 @@ mod report_cmd;
 mod run_cmd;
 mod sim_cmd;
 mod spp_cmd;
+mod tune_cmd;
 
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
@@ -324,6 +325,48 @@ enum Command {
     /// and the read-offs as CSV, --svg DIR plots them (docs/FORMATS.md "Allan
     /// deviation"). Record the IMU at rest; an hour or more shows the bias instability.
     Allan(allan_cmd::AllanArgs),
+    /// Estimate the noise model from the run's own data: the IMU's angle and velocity
+    /// random walk, bias and scale-factor instabilities, each aiding source's
+    /// measurement noise (GNSS position / velocity std scales, NHC, odometer, ZUPT,
+    /// pseudorange and range-rate sigma scales, barometer), and whether the GNSS
+    /// fixes' errors are white or time-correlated (with the correlation time).
+    ///
+    /// Maximum likelihood by expectation-maximisation over the RTS smoother: each pass
+    /// runs the filter forward and smooths it, then sets every noise to the mean
+    /// expected square of its noise under the smoothed estimate; the innovation
+    /// likelihood of each pass is printed and the configuration of highest likelihood
+    /// kept; the fix-error model is chosen by the likelihood among white and three
+    /// correlation times (docs/ALGORITHMS.md "Noise identification"). Without
+    /// [imu_noise] in the configuration the IMU model starts from the white noise read
+    /// from the data. Prints the estimates (given, start, estimate, relative standard
+    /// error) and the likelihood per pass; writes the tuned configuration (the input
+    /// with the estimates in it; paths absolute) to DIR/tuned.toml, the estimation to
+    /// DIR/tuning.json and DIR/tuning.txt, and the tuned configuration's run (what
+    /// `navfuse run DIR/tuned.toml --out DIR` writes, so `navfuse report DIR` shows
+    /// the estimation beside it).
+    Tune {
+        /// navfuse TOML configuration (docs/CONFIG.md); a .yaml file is read as KF-GINS.
+        config: PathBuf,
+        /// Output directory (created if missing).
+        #[arg(long, value_name = "DIR", default_value = "out/tune")]
+        out: PathBuf,
+        /// Most expectation-maximisation passes.
+        #[arg(long, value_name = "N", default_value_t = 8)]
+        iterations: usize,
+        /// Start the IMU noise from the data even where the configuration gives it.
+        #[arg(long)]
+        from_data: bool,
+        /// Keep the configuration's GNSS fix-error model (do not choose between white
+        /// and time-correlated errors).
+        #[arg(long)]
+        keep_fix_error_model: bool,
+        /// Only the estimation: no tuned run into DIR.
+        #[arg(long)]
+        no_run: bool,
+        /// No progress on stderr.
+        #[arg(long, short)]
+        quiet: bool,
+    },
     /// Measure speed and memory: the core filter loop without I/O (samples/s) and a full
     /// run writing KF-GINS's three output files (wall time, peak memory); with --tight,
     /// tight coupling with 10 satellites on simulated data (required: 500x real time).
@@ -480,6 +523,26 @@ fn main() -> ExitCode {
             quiet,
         } => batch_cmd::main(&manifest, &out, jobs, tables_only, quiet),
         Command::Allan(args) => allan_cmd::main(&args),
+        Command::Tune {
+            config,
+            out,
+            iterations,
+            from_data,
+            keep_fix_error_model,
+            no_run,
+            quiet,
+        } => tune_cmd::main(&tune_cmd::TuneArgs {
+            config,
+            out,
+            options: navfuse_app::tune::TuneOptions {
+                max_iterations: iterations,
+                from_data,
+                fix_error_model: !keep_fix_error_model,
+                ..Default::default()
+            },
+            run: !no_run,
+            quiet,
+        }),
         Command::Bench {
             kf_gins,
             tight,

@@ -173,6 +173,12 @@ pub struct GnssOptions {
     pub position_std_override: Option<Vector3<f64>>,
     /// Replace per-epoch velocity std with this (N, E, D) \[m/s\].
     pub velocity_std_override: Option<Vector3<f64>>,
+    /// Factor on every fix's position std (the reported one or the override): the
+    /// receiver's own figures are often optimistic or pessimistic by a constant
+    /// factor (`navfuse tune` estimates it).
+    pub position_std_scale: f64,
+    /// Factor on every fix's velocity std.
+    pub velocity_std_scale: f64,
     /// Innovation gate: chi-square tail probability at which a fix is rejected
     /// (e.g. 1e-4); None = no gating (KF-GINS behaviour).
     pub gate_probability: Option<f64>,
@@ -203,6 +209,8 @@ impl Default for GnssOptions {
             use_velocity: true,
             position_std_override: None,
             velocity_std_override: None,
+            position_std_scale: 1.0,
+            velocity_std_scale: 1.0,
             gate_probability: Some(DEFAULT_FIX_GATE_PROBABILITY),
             gate_timeout_s: DEFAULT_GATE_TIMEOUT_S,
             outages: OutageSchedule::default(),

@@ -274,16 +274,22 @@ pub struct InnovationStats {
     pub pairs: [usize; 3],
     /// Sum of the intervals between those pairs \[s\].
     pub pair_dt_sum: f64,
+    /// Sum over the updates tried of the Gaussian log-likelihood of the innovation,
+    /// -(ln det(2 pi S) + NIS) / 2 (the innovation form of the likelihood: REFERENCES
+    /// \[SCHWEPPE65\]).
+    pub log_likelihood: f64,
     /// The previous update's time, rows and normalised innovations.
     prev: Option<(f64, usize, [f64; 3])>,
 }
 
 impl InnovationStats {
     /// Note one update tried at time `t` with innovation `y`, its innovation variances
-    /// `s_diag` (first three rows) and NIS.
-    pub fn note(&mut self, t: f64, y: &[f64], s_diag: &[f64; 3], nis: f64) {
+    /// `s_diag` (first three rows), NIS and ln det S.
+    pub fn note(&mut self, t: f64, y: &[f64], s_diag: &[f64; 3], nis: f64, log_det_s: f64) {
         let rows = y.len();
         self.tried += 1;
+        self.log_likelihood -=
+            0.5 * (log_det_s + rows as f64 * (2.0 * std::f64::consts::PI).ln() + nis);
         if nis > EXTREME_NIS_PER_ROW * rows.max(1) as f64 {
             self.extreme += 1;
         }

@@ -12,19 +12,21 @@ use nalgebra::{DMatrix, DVector};
 #[derive(Clone, Debug)]
 pub enum UpdateOutcome {
     /// Accepted; the error-state estimate to feed back (x_est - x_true), the
-    /// normalised innovation squared and the innovation variances S_ii of the first
-    /// three rows.
+    /// normalised innovation squared, the innovation variances S_ii of the first
+    /// three rows and ln det S.
     Applied {
         dx: DVector<f64>,
         nis: f64,
         s_diag: [f64; 3],
+        log_det_s: f64,
     },
-    /// Rejected by the innovation gate: normalised innovation squared, threshold and
-    /// S_ii of the first three rows.
+    /// Rejected by the innovation gate: normalised innovation squared, threshold,
+    /// S_ii of the first three rows and ln det S.
     Rejected {
         nis: f64,
         threshold: f64,
         s_diag: [f64; 3],
+        log_det_s: f64,
     },
     /// Innovation covariance not positive definite (measurement dropped).
     Singular,
@@ -97,12 +99,16 @@ impl Eskf {
         for (k, v) in s_diag.iter_mut().enumerate().take(s.nrows()) {
             *v = s[(k, k)];
         }
+        // ln det S = 2 sum ln L_ii (S = L L^T).
+        let l = chol.l_dirty();
+        let log_det_s = 2.0 * (0..s.nrows()).map(|k| l[(k, k)].ln()).sum::<f64>();
         if let Some(t) = gate {
             if nis > t {
                 return UpdateOutcome::Rejected {
                     nis,
                     threshold: t,
                     s_diag,
+                    log_det_s,
                 };
             }
         }
@@ -118,7 +124,12 @@ impl Eskf {
         matmul(&mut self.p, &kr, &k, true, false);
         matmul(&mut self.p, &self.tmp, &i_kh, true, true);
         self.symmetrize();
-        UpdateOutcome::Applied { dx, nis, s_diag }
+        UpdateOutcome::Applied {
+            dx,
+            nis,
+            s_diag,
+            log_det_s,
+        }
     }
 
     /// Kalman gain K = P H^T (H P H^T + R)^-1 of a measurement, without updating

@@ -266,5 +266,6 @@ pub fn run_config(sc: &Scenario, dir: &Path) -> RunConfig {
         warnings: Vec::new(),
         smoother: Default::default(),
         relative_outages: Vec::new(),
+        defaulted: Vec::new(),
     }
 }

@@ -99,7 +99,9 @@ pub(crate) fn put_record(e: &mut Enc, r: &RtsRecord) {
     let n = r.dim();
     e.f(r.t);
     e.u(n as u64);
-    e.u(u64::from(r.phi.is_some()) | u64::from(r.q.is_some()) << 1);
+    e.u(u64::from(r.phi.is_some())
+        | u64::from(r.q.is_some()) << 1
+        | u64::from(r.propagated_only) << 2);
     if let Some(phi) = &r.phi {
         let nz: Vec<(usize, f64)> = phi
             .as_slice()
@@ -170,6 +172,7 @@ pub(crate) fn get_record(b: &[u8]) -> std::io::Result<RtsRecord> {
         q,
         p_post: d.sym(n)?,
         dx: d.vec(n)?,
+        propagated_only: flags & 4 != 0,
     })
 }
 
@@ -284,6 +287,7 @@ mod tests {
             q: Some(&p * 2.0),
             p_post: p,
             dx: DVector::from_vec(vec![1.0, -2.0, 3.0, 0.5]),
+            propagated_only: true,
         };
         let mut e = Enc::default();
         put_record(&mut e, &r);
@@ -291,6 +295,7 @@ mod tests {
         let r2 = RtsRecord {
             phi: None,
             q: None,
+            propagated_only: false,
             ..r
         };
         e.clear();

@@ -4,8 +4,8 @@
 //! backward filter (mode "combined") gives the smoothed solution, pushed into the
 //! sink with the separation report.
 
-mod codec;
-mod spill;
+pub(crate) mod codec;
+pub(crate) mod spill;
 
 use crate::error::Error;
 use crate::sink::{OutputLayout, SmoothedEpoch, SmoothedLayout, SolutionSink};

@@ -177,6 +177,11 @@ impl GnssLoose {
         if let (Some(s), true) = (g.velocity_std_override, fx.vel_ned.is_some()) {
             fx.vel_std_ned = Some(s);
         }
+        // The scales apply to the reported or overridden stds alike.
+        fx.std_ned *= g.position_std_scale;
+        if let Some(v) = fx.vel_std_ned.as_mut() {
+            *v *= g.velocity_std_scale;
+        }
         let use_vel = g.use_velocity;
         let fe = g.fix_error;
         // Elapsed times along the run (a backward run goes down in time).

@@ -75,6 +75,11 @@ impl GnssSixState {
         if let (Some(s), true) = (g.velocity_std_override, fx.vel_ned.is_some()) {
             fx.vel_std_ned = Some(s);
         }
+        // The scales apply to the reported or overridden stds alike.
+        fx.std_ned *= g.position_std_scale;
+        if let Some(v) = fx.vel_std_ned.as_mut() {
+            *v *= g.velocity_std_scale;
+        }
         if !g.use_velocity {
             fx.vel_ned = None;
             fx.vel_std_ned = None;

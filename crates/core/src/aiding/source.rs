@@ -303,13 +303,33 @@ impl Fuser<'_> {
         let st = &mut *self.status;
         st.innovation.clear();
         st.innovation.extend(lin.y.iter());
+        let entry = self.ins.update_entry(t, name, lin);
         let outcome = self.ins.update(lin, gate);
-        if let UpdateOutcome::Applied { nis, s_diag, .. }
-        | UpdateOutcome::Rejected { nis, s_diag, .. } = &outcome
+        if let (Some(mut e), UpdateOutcome::Applied { nis, .. }) = (entry, &outcome) {
+            // A row whose R the source inflated (robust down-weighting) has a NIS
+            // below that of its reported R.
+            e.down_weighted = nis_stat.is_some_and(|n| *nis < n * (1.0 - 1e-9));
+            if let Some(log) = self.ins.update_log.as_mut() {
+                log.push(e);
+            }
+        }
+        if let UpdateOutcome::Applied {
+            nis,
+            s_diag,
+            log_det_s,
+            ..
+        }
+        | UpdateOutcome::Rejected {
+            nis,
+            s_diag,
+            log_det_s,
+            ..
+        } = &outcome
         {
             let stats = self.record.innovation_stats.entry(name).or_default();
             // A down-weighted row counts with the NIS of its reported R.
-            stats.note(t, lin.y.as_slice(), s_diag, nis_stat.unwrap_or(*nis));
+            let nis = nis_stat.unwrap_or(*nis);
+            stats.note(t, lin.y.as_slice(), s_diag, nis, *log_det_s);
         }
         if let Some(log) = self.ins.innovations.as_mut() {
             let mut innovation = [f64::NAN; 3];

@@ -17,6 +17,7 @@ use crate::filter::{Eskf, UpdateOutcome};
 use crate::mechanization::Mechanizer;
 use crate::nav::timeline::TimeDirection;
 use crate::six_state::SixState;
+use crate::smoother::em::FusedUpdate;
 use crate::smoother::nominal::{correct, source_ranges, Nominal, NominalMut};
 use crate::smoother::record::{Recorder, Transition};
 use crate::state::{Block, StateLayout, ATT, BA, BG, N_INS, POS, SA, SG, VEL};
@@ -104,6 +105,9 @@ pub struct InsFilter {
     /// Every update tried since the last drain, when the run logs them
     /// (`innovations.csv`).
     pub(crate) innovations: Option<Vec<InnovationRow>>,
+    /// Every update applied since the last drain, for noise identification (while
+    /// recording for the smoother; smoother/em.rs).
+    pub(crate) update_log: Option<Vec<FusedUpdate>>,
     /// Which way the run goes in time (nav/backward.rs: backward, the IMU pieces
     /// come time-reversed, dt < 0).
     pub(crate) direction: TimeDirection,
@@ -257,6 +261,7 @@ impl InsFilter {
             corrections: 0,
             recorder: None,
             innovations: None,
+            update_log: None,
             direction: TimeDirection::Forward,
         }
     }
@@ -501,6 +506,50 @@ impl InsFilter {
         if let Some(r) = self.recorder.as_mut() {
             r.transition(self.nav.t, tr, &self.filter.p);
         }
+    }
+
+    /// What noise identification needs of update `lin` of `source` at time `t`,
+    /// taken before it is applied (smoother/em.rs); None unless the run logs updates
+    /// while recording.
+    pub(crate) fn update_entry(
+        &self,
+        t: f64,
+        source: &'static str,
+        lin: &Linearized,
+    ) -> Option<FusedUpdate> {
+        self.update_log.as_ref()?;
+        let rec = self.recorder.as_ref()?;
+        let dx = rec.open_dx();
+        let rows = lin.y.len();
+        let h: Vec<Vec<(usize, f64)>> = (0..rows)
+            .map(|k| {
+                (0..lin.h.ncols())
+                    .filter(|&j| lin.h[(k, j)] != 0.0)
+                    .map(|j| (j, lin.h[(k, j)]))
+                    .collect()
+            })
+            .collect();
+        let h_dx_before = h
+            .iter()
+            .map(|row| row.iter().map(|&(j, v)| v * dx[j]).sum())
+            .collect();
+        let gnss_bias = self.layout.index(Block::GnssBias).map(|b| {
+            (
+                [0, 1, 2].map(|k| self.extra[b + k]),
+                [0, 1, 2].map(|k| dx[b + k]),
+            )
+        });
+        Some(FusedUpdate {
+            t,
+            record: rec.current_index(),
+            source,
+            y: lin.y.iter().copied().collect(),
+            h,
+            r: (0..rows).map(|k| lin.r[(k, k)]).collect(),
+            h_dx_before,
+            down_weighted: false,
+            gnss_bias,
+        })
     }
 
     /// Record for the RTS smoother from now on.

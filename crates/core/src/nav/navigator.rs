@@ -17,6 +17,7 @@ use crate::attitude::{euler_from_c_bn, euler_from_q_bn};
 use crate::config::NavConfig;
 use crate::events::{AidStatus, Event, InnovationRow, RunSummary, SolutionState};
 use crate::integrity::IntegrityState;
+use crate::smoother::em::FusedUpdate;
 use crate::smoother::{Nominal, RtsRecord};
 use crate::state::{Block, StateLayout, ATT, N_INS, POS, VEL};
 use crate::types::{ImuErrors, ImuSample, Measurement, NavState};
@@ -260,6 +261,21 @@ impl Navigator {
     /// record per covariance epoch, taken with [`Navigator::take_smoother_records`].
     pub fn record_for_smoothing(&mut self) {
         self.ins.start_recording();
+    }
+
+    /// While recording for the smoother: log every applied update for noise
+    /// identification (smoother/em.rs), taken with [`Navigator::take_updates`].
+    pub fn log_updates(&mut self) {
+        self.ins.update_log = Some(Vec::new());
+    }
+
+    /// The updates applied since the last call (empty when not logging).
+    pub fn take_updates(&mut self) -> Vec<FusedUpdate> {
+        self.ins
+            .update_log
+            .as_mut()
+            .map(std::mem::take)
+            .unwrap_or_default()
     }
 
     /// Index of the smoother record the current epoch belongs to (the last one

@@ -8,6 +8,7 @@ use crate::aiding::registry;
 use crate::aiding::source::AidingSource;
 use crate::config::{GnssFusion, NavConfig};
 use crate::events::{Event, InnovationRow, RunSummary};
+use crate::smoother::em::FusedUpdate;
 use crate::smoother::RtsRecord;
 use crate::types::{ImuSample, Measurement};
 
@@ -76,6 +77,9 @@ pub struct RunHooks<'a, E> {
     pub on_record: Option<&'a mut dyn FnMut(RtsRecord) -> Result<(), E>>,
     /// Every update tried ([`InnovationRow`]), after each IMU step.
     pub on_innovations: Option<&'a mut dyn FnMut(&[InnovationRow]) -> Result<(), E>>,
+    /// With `on_record`: every update applied, as noise identification needs it
+    /// ([`FusedUpdate`]), after each IMU step.
+    pub on_updates: Option<&'a mut dyn FnMut(Vec<FusedUpdate>) -> Result<(), E>>,
 }
 
 impl<E> Default for RunHooks<'_, E> {
@@ -83,6 +87,7 @@ impl<E> Default for RunHooks<'_, E> {
         RunHooks {
             on_record: None,
             on_innovations: None,
+            on_updates: None,
         }
     }
 }
@@ -131,6 +136,7 @@ fn drive<E: From<NavError>>(
     let RunHooks {
         mut on_record,
         mut on_innovations,
+        mut on_updates,
     } = hooks;
     if matches!(cfg.gnss.fusion, GnssFusion::SixState { .. }) && cfg.tight.enabled {
         return Err(NavError(
@@ -152,6 +158,9 @@ fn drive<E: From<NavError>>(
     let mut n = Navigator::with_sources(cfg, start.t0, start.lla, start.rpy, start.v_n, sources);
     if on_record.is_some() {
         n.record_for_smoothing();
+        if on_updates.is_some() {
+            n.log_updates();
+        }
     }
     if on_innovations.is_some() {
         n.log_innovations();
@@ -199,6 +208,12 @@ fn drive<E: From<NavError>>(
             let rows = n.take_innovations();
             if !rows.is_empty() {
                 f(&rows)?;
+            }
+        }
+        if let Some(f) = on_updates.as_mut() {
+            let ups = n.take_updates();
+            if !ups.is_empty() {
+                f(ups)?;
             }
         }
         // Cadence on the time scale the records carry (GNSS time).

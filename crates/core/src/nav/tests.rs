@@ -42,6 +42,8 @@ pub(crate) fn cfg() -> NavConfig {
             use_velocity: false,
             position_std_override: None,
             velocity_std_override: None,
+            position_std_scale: 1.0,
+            velocity_std_scale: 1.0,
             gate_probability: None,
             gate_timeout_s: DEFAULT_GATE_TIMEOUT_S,
             outages: OutageSchedule::default(),

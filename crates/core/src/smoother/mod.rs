@@ -7,10 +7,13 @@
 //!   at an output epoch is its forward nominal with the smoothed error removed.
 //! - [`combine`]: forward and backward filter solutions weighted by their
 //!   covariances, and their separation.
+//! - [`em`]: what noise identification learns from the backward pass (the
+//!   smoothed residual of each update, the expected process noise per state).
 //!
 //! No I/O here: the app keeps the records on disk and feeds them back in reverse.
 
 pub mod combine;
+pub mod em;
 pub mod nominal;
 pub mod record;
 pub mod rts;

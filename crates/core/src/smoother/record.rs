@@ -25,6 +25,10 @@ pub struct RtsRecord {
     pub p_post: DMatrix<f64>,
     /// Sum of the corrections fed back at this record (zero without an update).
     pub dx: DVector<f64>,
+    /// The transition is the filter's process model alone: no variance added, no
+    /// state reset (re-admissions, gaps and re-initialisations are not). Noise
+    /// identification (`crate::tuning`) learns the process noise from these only.
+    pub propagated_only: bool,
 }
 
 impl RtsRecord {
@@ -50,6 +54,7 @@ struct Open {
     q: Option<DMatrix<f64>>,
     dx: DVector<f64>,
     updated: bool,
+    propagated_only: bool,
 }
 
 impl Open {
@@ -60,6 +65,7 @@ impl Open {
             q: None,
             dx: DVector::zeros(n),
             updated: false,
+            propagated_only: true,
         }
     }
 }
@@ -94,6 +100,7 @@ impl Recorder {
             q: open.q,
             p_post: p_now.clone(),
             dx: open.dx,
+            propagated_only: open.propagated_only,
         });
         self.count += 1;
     }
@@ -119,9 +126,11 @@ impl Recorder {
                 });
             }
             Transition::AddVariance(i, var) => {
+                o.propagated_only = false;
                 o.q.get_or_insert_with(|| DMatrix::zeros(n, n))[(i, i)] += var;
             }
             Transition::Reset(i, var) => {
+                o.propagated_only = false;
                 let phi = o.phi.get_or_insert_with(|| DMatrix::identity(n, n));
                 phi.row_mut(i).fill(0.0);
                 let q = o.q.get_or_insert_with(|| DMatrix::zeros(n, n));
@@ -130,6 +139,11 @@ impl Recorder {
                 q[(i, i)] = var;
             }
         }
+    }
+
+    /// Sum of the corrections fed back so far at the open record.
+    pub fn open_dx(&self) -> &DVector<f64> {
+        &self.open.dx
     }
 
     /// An update was applied and `dx` fed back.

@@ -16,6 +16,7 @@
 //! The covariance line is the Joseph-like form of P_k^+ + C_k (P_{k+1|N} -
 //! P_{k+1}^-) C_k^T: a sum of positive semi-definite terms, symmetrised.
 
+use super::em::{self, FusedUpdate, ProcessNoiseStats, SmoothedResidual};
 use super::record::RtsRecord;
 use crate::filter::matmul;
 use nalgebra::{DMatrix, DVector};
@@ -114,6 +115,10 @@ pub struct Gain {
     q: Option<DMatrix<f64>>,
     p_post: DMatrix<f64>,
     dx: DVector<f64>,
+    /// The later record's Phi - I entries, and whether its transition is the process
+    /// model alone (noise identification, em.rs).
+    phi_next: Vec<(usize, usize, f64)>,
+    propagated_next: bool,
 }
 
 impl Gain {
@@ -121,13 +126,19 @@ impl Gain {
     pub fn forward_var(&self) -> DVector<f64> {
         self.p_post.diagonal()
     }
+
+    /// Whether updates were applied at the record.
+    pub fn updated(&self) -> bool {
+        self.dx.iter().any(|v| *v != 0.0)
+    }
 }
 
 /// Makes the [`Gain`]s from the records, last to first.
 #[derive(Default)]
 pub struct GainMaker {
-    /// The later record's Phi - I (empty: identity) and Q.
-    later: Option<(Vec<(usize, usize, f64)>, Option<DMatrix<f64>>)>,
+    /// The later record's Phi - I (empty: identity), Q, and whether its transition
+    /// is the process model alone.
+    later: Option<(Vec<(usize, usize, f64)>, Option<DMatrix<f64>>, bool)>,
     /// Records where P^- had to be inverted by eigen-decomposition (not positive
     /// definite in floating point).
     pub pseudo_inverses: u64,
@@ -144,10 +155,11 @@ impl GainMaker {
         let next = (
             rec.phi.as_ref().map(off_identity).unwrap_or_default(),
             rec.q,
+            rec.propagated_only,
         );
-        let (c, q) = match self.later.replace(next) {
-            None => (None, None),
-            Some((phi, q)) => {
+        let (c, q, phi_next, propagated_next) = match self.later.replace(next) {
+            None => (None, None, Vec::new(), false),
+            Some((phi, q, propagated)) => {
                 if q.as_ref().is_some_and(|q| q.nrows() != n) {
                     return Err(SmoothError(format!(
                         "record at t = {:.3}: {n} states, the later record more or fewer",
@@ -166,7 +178,7 @@ impl GainMaker {
                 for i in 0..n {
                     i_c_phi[(i, i)] += 1.0;
                 }
-                (Some((c, i_c_phi)), q)
+                (Some((c, i_c_phi)), q, phi, propagated)
             }
         };
         Ok(Gain {
@@ -175,6 +187,8 @@ impl GainMaker {
             q,
             p_post: rec.p_post,
             dx: rec.dx,
+            phi_next,
+            propagated_next,
         })
     }
 
@@ -245,11 +259,57 @@ impl RtsBackward {
         self.smooth(g)
     }
 
+    /// [`RtsBackward::step`] with the expectation step of noise identification
+    /// ([`RtsBackward::smooth_em`]).
+    pub fn step_em(
+        &mut self,
+        rec: RtsRecord,
+        updates: &[FusedUpdate],
+        gnss_bias_index: Option<usize>,
+        process: &mut ProcessNoiseStats,
+        residuals: &mut Vec<SmoothedResidual>,
+    ) -> Result<SmoothedRecord, SmoothError> {
+        let g = self.gains.gain(rec)?;
+        self.smooth_em(g, updates, gnss_bias_index, process, residuals)
+    }
+
     /// One step back with a gain made ahead ([`GainMaker`]).
     pub fn smooth(&mut self, g: Gain) -> Result<SmoothedRecord, SmoothError> {
+        self.smooth_inner(g, None)
+    }
+
+    /// [`RtsBackward::smooth`] with the noise identification's expectation step
+    /// (em.rs): the smoothed residuals of `updates` (the record's applied updates) are
+    /// appended to `residuals`, and the transition to the later record, when it is the
+    /// process model alone, is added to `process`. `gnss_bias_index`: where the
+    /// fix-error states are in the layout.
+    pub fn smooth_em(
+        &mut self,
+        g: Gain,
+        updates: &[FusedUpdate],
+        gnss_bias_index: Option<usize>,
+        process: &mut ProcessNoiseStats,
+        residuals: &mut Vec<SmoothedResidual>,
+    ) -> Result<SmoothedRecord, SmoothError> {
+        self.smooth_inner(
+            g,
+            Some(EmSinks {
+                updates,
+                gnss_bias_index,
+                process,
+                residuals,
+            }),
+        )
+    }
+
+    fn smooth_inner(
+        &mut self,
+        g: Gain,
+        em: Option<EmSinks<'_>>,
+    ) -> Result<SmoothedRecord, SmoothError> {
         let n = g.p_post.nrows();
-        let (s_post, p_smoothed) = match (self.later.take(), g.c) {
-            (None, _) | (_, None) => (DVector::zeros(n), g.p_post),
+        let (s_post, p_smoothed, later) = match (self.later.take(), g.c) {
+            (None, _) | (_, None) => (DVector::zeros(n), g.p_post, None),
             (Some((s_prior_next, p_next)), Some((c, i_c_phi))) => {
                 if p_next.nrows() != n {
                     return Err(SmoothError(format!(
@@ -259,7 +319,7 @@ impl RtsBackward {
                     )));
                 }
                 let s_post = &c * &s_prior_next;
-                let mut q_plus_ps = p_next;
+                let mut q_plus_ps = p_next.clone();
                 if let Some(q) = &g.q {
                     q_plus_ps += q;
                 }
@@ -268,7 +328,7 @@ impl RtsBackward {
                 let cq = mul(&c, &q_plus_ps, false);
                 matmul(&mut p, &cq, &c, true, true);
                 symmetrize(&mut p);
-                (s_post, p)
+                (s_post, p, Some((s_prior_next, p_next, c)))
             }
         };
         if !s_post.iter().all(|v| v.is_finite()) || !(0..n).all(|i| p_smoothed[(i, i)].is_finite())
@@ -279,6 +339,28 @@ impl RtsBackward {
             )));
         }
         let s_prior = &s_post + &g.dx;
+        if let Some(em) = em {
+            em::residuals(
+                em.updates,
+                &s_prior,
+                &p_smoothed,
+                em.gnss_bias_index,
+                em.residuals,
+            );
+            if let (Some((s_next, p_next, c)), Some(q), true) = (&later, &g.q, g.propagated_next) {
+                em::accumulate_process_noise(
+                    em.process,
+                    g.t,
+                    &s_post,
+                    &p_smoothed,
+                    s_next,
+                    p_next,
+                    c,
+                    &g.phi_next,
+                    q,
+                );
+            }
+        }
         let out = SmoothedRecord {
             t: g.t,
             s_post,
@@ -288,6 +370,14 @@ impl RtsBackward {
         self.later = Some((s_prior, p_smoothed));
         Ok(out)
     }
+}
+
+/// Where [`RtsBackward::smooth_em`] puts what it learns.
+struct EmSinks<'a> {
+    updates: &'a [FusedUpdate],
+    gnss_bias_index: Option<usize>,
+    process: &'a mut ProcessNoiseStats,
+    residuals: &'a mut Vec<SmoothedResidual>,
 }
 
 /// r x = rhs for a symmetric positive definite r (faer's Cholesky); None when r is
@@ -341,6 +431,7 @@ mod tests {
             q: None,
             p_post: DMatrix::from_element(1, 1, p0_post),
             dx: DVector::zeros(1),
+            propagated_only: true,
         });
         p = p0_post;
         for k in 1..10 {
@@ -351,6 +442,7 @@ mod tests {
                 q: Some(DMatrix::from_element(1, 1, q)),
                 p_post: DMatrix::from_element(1, 1, p),
                 dx: DVector::zeros(1),
+                propagated_only: true,
             });
         }
         // Record 10: innovation y = x_est - z = 1 (z = -1), dx = K y.
@@ -363,6 +455,7 @@ mod tests {
             q: Some(DMatrix::from_element(1, 1, q)),
             p_post: DMatrix::from_element(1, 1, p * (1.0 - k)),
             dx: DVector::from_element(1, dx),
+            propagated_only: true,
         });
         let mut b = RtsBackward::new();
         let out: Vec<_> = recs.into_iter().rev().map(|r| b.step(r).unwrap()).collect();
@@ -400,6 +493,7 @@ mod tests {
             q: None,
             p_post: p.clone(),
             dx: DVector::zeros(2),
+            propagated_only: true,
         };
         p[(0, 0)] = 2.0;
         let rec1 = RtsRecord {
@@ -408,6 +502,7 @@ mod tests {
             q: Some(DMatrix::from_diagonal(&DVector::from_vec(vec![1.0, 0.0]))),
             p_post: DMatrix::from_diagonal(&DVector::from_vec(vec![1.0, 0.0])),
             dx: DVector::from_vec(vec![0.5, 0.0]),
+            propagated_only: true,
         };
         let mut b = RtsBackward::new();
         b.step(rec1).unwrap();

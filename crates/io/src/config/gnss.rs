@@ -113,6 +113,10 @@ pub(super) struct TGnss {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) velocity_std_mps: Option<Num3>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) position_std_scale: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) velocity_std_scale: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) gate_probability: Option<Gate>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) gate_timeout_s: Option<f64>,
@@ -177,6 +181,8 @@ impl TGnss {
             use_velocity: None,
             position_std_m: None,
             velocity_std_mps: None,
+            position_std_scale: None,
+            velocity_std_scale: None,
             gate_probability: None,
             gate_timeout_s: None,
             error_corr_time_s: None,
@@ -410,6 +416,14 @@ pub(super) fn convert(
         use_velocity: g.use_velocity.unwrap_or(d.use_velocity),
         position_std_override,
         velocity_std_override,
+        position_std_scale: positive(
+            "gnss.position_std_scale",
+            g.position_std_scale.unwrap_or(d.position_std_scale),
+        )?,
+        velocity_std_scale: positive(
+            "gnss.velocity_std_scale",
+            g.velocity_std_scale.unwrap_or(d.velocity_std_scale),
+        )?,
         gate_probability,
         gate_timeout_s,
         outages,
@@ -545,6 +559,8 @@ pub(super) fn to_toml(
             .velocity_std_override
             .as_ref()
             .map(|v| Num3::from3(arr3(v))),
+        position_std_scale: Some(go.position_std_scale),
+        velocity_std_scale: Some(go.velocity_std_scale),
         gate_probability: Some(Gate::from_option(go.gate_probability)),
         gate_timeout_s: Some(go.gate_timeout_s),
         error_corr_time_s: Some(go.fix_error.corr_time_s),

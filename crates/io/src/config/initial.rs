@@ -13,7 +13,7 @@ use super::validate::{n3, std3, std3_si, v3};
 use super::values::Num3;
 use crate::error::SCALE_MAX_SI;
 
-#[derive(Debug, Deserialize, Serialize)]
+#[derive(Debug, Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct TInitial {
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -24,9 +24,12 @@ pub(super) struct TInitial {
     pub(super) attitude_deg: Option<Vec<f64>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) alignment: Option<TAlignment>,
-    pub(super) position_std_m: Num3,
-    pub(super) velocity_std_mps: Num3,
-    pub(super) attitude_std_deg: Num3,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) position_std_m: Option<Num3>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) velocity_std_mps: Option<Num3>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) attitude_std_deg: Option<Num3>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) gyro_bias_degph: Option<Num3>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -45,9 +48,22 @@ pub(super) struct TInitial {
     pub(super) accel_scale_std_ppm: Option<Num3>,
 }
 
+/// Defaults of the initial stds (user units: m, m/s, deg roll pitch yaw): what a
+/// start from the first GNSS fix and a coarse alignment can claim. The keys that take
+/// them are listed in `RunConfig::defaulted`.
+pub const DEFAULT_INITIAL_STD: [(&str, [f64; 3]); 3] = [
+    ("initial.position_std_m", [1.0, 1.0, 2.0]),
+    ("initial.velocity_std_mps", [0.5, 0.5, 0.5]),
+    ("initial.attitude_std_deg", [2.0, 2.0, 10.0]),
+];
+
 /// `noise`: the converted `[imu_noise]`, whose stds are the default initial IMU error
-/// stds.
-pub(super) fn convert(i: &TInitial, noise: &ImuNoise) -> KResult<InitialState> {
+/// stds. The initial stds not given are pushed to `defaulted`.
+pub(super) fn convert(
+    i: &TInitial,
+    noise: &ImuNoise,
+    defaulted: &mut Vec<&'static str>,
+) -> KResult<InitialState> {
     let pos = match &i.position_deg_m {
         Some(p) => Some(v3("initial.position_deg_m", p)?),
         None => None,
@@ -172,16 +188,28 @@ pub(super) fn convert(i: &TInitial, noise: &ImuNoise) -> KResult<InitialState> {
             d.accel_scale,
         )?,
     };
-    let required = |key: &str, v: &Num3, unit: Unit| std3_si(key, std3(key, v)?, unit);
+    let mut required = |k: usize, v: &Option<Num3>, unit: Unit| {
+        let (key, default) = DEFAULT_INITIAL_STD[k];
+        match v {
+            Some(v) => std3_si(key, std3(key, v)?, unit),
+            None => {
+                defaulted.push(key);
+                std3_si(key, default, unit)
+            }
+        }
+    };
+    let pos_std = required(0, &i.position_std_m, SAME)?;
+    let vel_std = required(1, &i.velocity_std_mps, SAME)?;
+    let att_std = required(2, &i.attitude_std_deg, DEG)?;
     Ok(InitialState {
         lla: pos.map(|p| Vector3::new((DEG.to_si)(p[0]), (DEG.to_si)(p[1]), p[2])),
         v_n,
         attitude,
         imu_errors,
         imu_errors_std,
-        pos_std: required("initial.position_std_m", &i.position_std_m, SAME)?,
-        vel_std: required("initial.velocity_std_mps", &i.velocity_std_mps, SAME)?,
-        att_std: required("initial.attitude_std_deg", &i.attitude_std_deg, DEG)?,
+        pos_std,
+        vel_std,
+        att_std,
     })
 }
 
@@ -195,9 +223,9 @@ pub(super) fn to_toml(i: &InitialState) -> TInitial {
             _ => None,
         },
         alignment: alignment::to_toml(&i.attitude),
-        position_std_m: Num3::from3(arr3(&i.pos_std)),
-        velocity_std_mps: Num3::from3(arr3(&i.vel_std)),
-        attitude_std_deg: DEG.user3(&i.att_std),
+        position_std_m: Some(Num3::from3(arr3(&i.pos_std))),
+        velocity_std_mps: Some(Num3::from3(arr3(&i.vel_std))),
+        attitude_std_deg: Some(DEG.user3(&i.att_std)),
         gyro_bias_degph: some3(&i.imu_errors.gyro_bias, DEGPH),
         accel_bias_mgal: some3(&i.imu_errors.accel_bias, MGAL),
         gyro_scale_ppm: some3(&i.imu_errors.gyro_scale, PPM),

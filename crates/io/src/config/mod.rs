@@ -128,6 +128,10 @@ pub struct RunConfig {
     pub warnings: Vec<String>,
     /// Periodic outages still relative to the run start; empty once resolved.
     pub relative_outages: Vec<RelativeOutage>,
+    /// The noise and initial-uncertainty keys the file did not give, which took their
+    /// defaults (`imu_noise::DEFAULT_NOISE`, `initial::DEFAULT_INITIAL_STD`): `navfuse
+    /// run` warns about them, `navfuse tune` starts them from the data.
+    pub defaulted: Vec<&'static str>,
 }
 
 impl RunConfig {

@@ -45,7 +45,9 @@ pub(super) struct TomlRoot {
     pub(super) baro: Option<TBaro>,
     #[serde(default, skip_serializing_if = "TTime::is_empty")]
     pub(super) time: TTime,
+    #[serde(default)]
     pub(super) initial: TInitial,
+    #[serde(default)]
     pub(super) imu_noise: TNoise,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) vehicle: Option<TVehicle>,
@@ -75,6 +77,7 @@ pub(super) struct Converted {
     output: OutputSpec,
     smoother: SmootherSpec,
     relative_outages: Vec<RelativeOutage>,
+    defaulted: Vec<&'static str>,
 }
 
 impl Converted {
@@ -97,6 +100,7 @@ impl Converted {
             kfgins_output_path: kf_out,
             warnings,
             relative_outages: self.relative_outages,
+            defaulted: self.defaulted,
         }
     }
 }
@@ -121,8 +125,9 @@ pub(super) fn convert(raw: TomlRoot, base: &Path) -> KResult<Converted> {
             TightOptions::default(),
         ),
     };
-    let imu_noise = imu_noise::convert(&raw.imu_noise)?;
-    let initial = initial::convert(&raw.initial, &imu_noise)?;
+    let mut defaulted = Vec::new();
+    let imu_noise = imu_noise::convert(&raw.imu_noise, &mut defaulted)?;
+    let initial = initial::convert(&raw.initial, &imu_noise, &mut defaulted)?;
     let filter = filter::convert(&raw.filter)?;
     let output = output::convert(&raw.output)?;
     let smoother = match &raw.smoother {
@@ -186,6 +191,7 @@ pub(super) fn convert(raw: TomlRoot, base: &Path) -> KResult<Converted> {
         output,
         smoother,
         relative_outages,
+        defaulted,
     })
 }
 
