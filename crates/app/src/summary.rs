@@ -136,6 +136,7 @@ impl JobResult {
                 "extreme_nis": st.extreme,
                 "lag1_autocorrelation": (0..3).map(|i| st.autocorrelation(i)).collect::<Vec<_>>(),
                 "mean_interval_s": st.mean_pair_dt(),
+                "log_likelihood": st.log_likelihood,
             }))).collect::<std::collections::BTreeMap<_, _>>(),
             "nis_per_row": s.aiding_nis.iter().map(|(k, (sum, rows))| (*k, sum / (*rows).max(1) as f64)).collect::<std::collections::BTreeMap<_, _>>(),
             "static_s": s.static_s,

@@ -414,6 +414,17 @@ enum Command {
         /// built-in one.
         #[arg(long, value_name = "FILE.toml", requires = "tight")]
         scenario: Option<PathBuf>,
+        /// Noise identification instead (`navfuse tune` against the hand-tuned runs,
+        /// from configurations with every noise key at its default): simulated cars
+        /// with white and correlated fix errors, with and without an odometer, over
+        /// N seeds each; with ../shared the KF-GINS stand-in and the real drive.
+        /// Prints each case's verdicts (PASS / FAIL; informational, the exit status
+        /// does not follow them).
+        #[arg(long, value_name = "SEEDS", conflicts_with_all = ["tight", "kf_gins", "smooth", "report"])]
+        tune: Option<usize>,
+        /// With --tune: the simulated cases only.
+        #[arg(long, requires = "tune")]
+        sim_only: bool,
         /// Repetitions of each measurement (the best is reported).
         #[arg(long, default_value_t = 3)]
         repeat: usize,
@@ -550,6 +561,8 @@ fn main() -> ExitCode {
             report,
             duration_s,
             scenario,
+            tune,
+            sim_only,
             repeat,
             json,
         } => navfuse_experiments::bench(&navfuse_experiments::BenchArgs {
@@ -561,6 +574,8 @@ fn main() -> ExitCode {
             scenario,
             repeat,
             json,
+            tune_seeds: tune.unwrap_or(0),
+            tune_sim_only: sim_only,
         }),
     };
     match result {

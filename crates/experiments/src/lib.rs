@@ -23,6 +23,7 @@ mod navigate;
 mod pool;
 mod reproduce;
 mod scenarios;
+pub mod tuning;
 pub mod track;
 mod work;
 
@@ -102,6 +103,11 @@ pub struct BenchArgs {
     pub repeat: usize,
     /// Print JSON.
     pub json: bool,
+    /// Noise identification against the hand-tuned runs instead, with this many
+    /// seeds per simulated case (0: not this benchmark).
+    pub tune_seeds: usize,
+    /// With `tune_seeds`: only the simulated cases.
+    pub tune_sim_only: bool,
 }
 
 /// With `tight`: the default of [`BenchArgs::duration_s`] \[s\].
@@ -110,7 +116,13 @@ pub const BENCH_TIGHT_DEFAULT_DURATION_S: f64 = bench::tight::DEFAULT_DURATION_S
 /// `navfuse bench`: loose coupling on the KF-GINS stand-in, or with `tight` tight
 /// coupling on a simulated drive. Prints the figures on stdout.
 pub fn bench(a: &BenchArgs) -> Result<()> {
-    if a.report {
+    if a.tune_seeds > 0 {
+        tuning::main(&tuning::TuneBenchArgs {
+            seeds: a.tune_seeds,
+            sim_only: a.tune_sim_only,
+            json: a.json,
+        })
+    } else if a.report {
         bench::report::main(a.repeat, a.json)
     } else if a.smooth {
         bench::smooth::main(a.repeat, a.json)

@@ -95,3 +95,51 @@ fn remove(t: &mut toml::Table, path: &[String]) -> bool {
         },
     }
 }
+
+impl RunConfig {
+    /// This configuration as a user who gives only files, frames, lever arms, rates
+    /// and the initial pose writes it: every noise key at its default (`[imu_noise]`
+    /// as `imu_noise::DEFAULT_NOISE`, listed in `defaulted`, and the initial IMU error
+    /// stds following it; the GNSS fix stds as the file gives them with the default
+    /// error model; the odometer, NHC and ZUPT noise and the mounting and
+    /// odometer-scale uncertainty at their defaults). The initial position, velocity
+    /// and attitude and their stds stay (they say what the user knows of the start,
+    /// not how the sensors err). The start of noise identification (`navfuse tune`)
+    /// and of its benchmark.
+    pub fn without_noise_model(&self) -> RunConfig {
+        use navfuse_core::config::{
+            FixErrorOptions, GnssOptions, NhcOptions, OdometerOptions, VehicleOptions,
+            ZuptOptions,
+        };
+        let mut c = self.clone();
+        let mut defaulted = Vec::new();
+        let noise = super::imu_noise::convert(&Default::default(), &mut defaulted)
+            .expect("the default noise model converts");
+        let n = &mut c.nav;
+        n.initial.imu_errors_std = noise.error_stds();
+        n.imu_noise = noise;
+        let g = GnssOptions::default();
+        n.gnss.position_std_override = None;
+        n.gnss.velocity_std_override = None;
+        n.gnss.position_std_scale = g.position_std_scale;
+        n.gnss.velocity_std_scale = g.velocity_std_scale;
+        let fe = FixErrorOptions::default();
+        n.gnss.fix_error.corr_time_s = fe.corr_time_s;
+        n.gnss.fix_error.corr_fraction = fe.corr_fraction;
+        let (o, h, z, v) = (
+            OdometerOptions::default(),
+            NhcOptions::default(),
+            ZuptOptions::default(),
+            VehicleOptions::default(),
+        );
+        n.odometer.std_mps = o.std_mps;
+        n.odometer.std_speed_fraction = o.std_speed_fraction;
+        n.odometer.scale_std = o.scale_std;
+        n.nhc.std_mps = h.std_mps;
+        n.zupt.velocity_std_mps = z.velocity_std_mps;
+        n.zupt.angular_rate_std = z.angular_rate_std;
+        n.vehicle.mounting_std = v.mounting_std;
+        c.defaulted = defaulted;
+        c
+    }
+}
