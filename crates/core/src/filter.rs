@@ -23,7 +23,7 @@ pub enum UpdateOutcome {
 /// Cholesky factor S = H P H^T + R = L L^T and w = L^-1 y, row i's innovation given
 /// the rows before it is e_i = L_ii w_i with variance s_i = L_ii^2 (what a
 /// sequential update row by row would see, [`Eskf::update_sequential`]), and its
-/// share of the joint NIS is nis_i = w_i^2 (they sum to y^T S^-1 y).
+/// share of the joint NIS is nis_i = w_i^2 (they sum to y^T S^-1 y). REFERENCES [BS].
 #[derive(Clone, Debug, PartialEq)]
 pub struct RowTerms {
     pub innovation: DVector<f64>,
