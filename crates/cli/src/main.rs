@@ -391,6 +391,10 @@ enum Command {
     /// With --report: `navfuse report` on that hour (run with --smooth, not timed)
     /// against its 200 Hz truth: wall time and peak memory of reading, thinning,
     /// scoring, drawing and writing the page.
+    ///
+    /// With --tdcp-sweep: not a speed measurement but the accuracy sweep of tight
+    /// coupling with TDCP against Doppler over random sites and start times (issue
+    /// 30): a table per drive and latitude band, PASS/FAIL (the exit status).
     Bench {
         /// KF-GINS YAML for the full run (default: ../shared/data/kf-gins/synthetic/kf-gins.yaml).
         #[arg(long, value_name = "FILE.yaml", conflicts_with = "tight")]
@@ -406,6 +410,22 @@ enum Command {
         /// truth).
         #[arg(long, conflicts_with_all = ["tight", "kf_gins", "smooth"])]
         report: bool,
+        /// The TDCP sweep instead (issue 30): --runs simulated car drives at random
+        /// sites (every 20 deg latitude band from 80 S to 80 N in turn, any
+        /// longitude) and start times (GPS week, time of week), each navigated with
+        /// tight coupling with TDCP and with Doppler, without and with one GNSS outage
+        /// of 60-600 s. PASS: no horizontal error above 50 m from 30 s after the start
+        /// or after GNSS returns, and TDCP's velocity RMS at or below Doppler's in
+        /// every drive; exit status 1 on FAIL.
+        #[arg(long, conflicts_with_all = ["tight", "kf_gins", "smooth", "report"])]
+        tdcp_sweep: bool,
+        /// With --tdcp-sweep: the number of drives.
+        #[arg(long, value_name = "N", requires = "tdcp_sweep", default_value_t = navfuse_experiments::BENCH_TDCP_SWEEP_DEFAULT_RUNS)]
+        runs: usize,
+        /// With --tdcp-sweep: the sweep's seed (sites, start times, outages and the
+        /// simulator's seeds follow from it).
+        #[arg(long, value_name = "S", requires = "tdcp_sweep", default_value_t = 1)]
+        seed: u64,
         /// With --tight: seconds of data to simulate and navigate (at most the
         /// scenario's length, 1880 s for the built-in one).
         #[arg(long, value_name = "N", requires = "tight", default_value_t = navfuse_experiments::BENCH_TIGHT_DEFAULT_DURATION_S)]
@@ -559,6 +579,9 @@ fn main() -> ExitCode {
             tight,
             smooth,
             report,
+            tdcp_sweep,
+            runs,
+            seed,
             duration_s,
             scenario,
             tune,
@@ -570,6 +593,9 @@ fn main() -> ExitCode {
             tight,
             smooth,
             report,
+            tdcp_sweep,
+            runs,
+            seed,
             duration_s,
             scenario,
             repeat,

@@ -43,8 +43,11 @@ pub enum Event {
     },
     /// Tight coupling: the carriers of `flagged` of `of` satellites disagreed with the
     /// INS at once (its velocity, not cycle slips): TDCP is not fused until they
-    /// agree again; Doppler stands in when the receiver gives it.
+    /// agree again (tested every epoch); Doppler stands in when the receiver gives it.
     CarriersDistrusted { t: f64, flagged: usize, of: usize },
+    /// Tight coupling: the carriers agree with the INS again (tested every epoch),
+    /// `after_s` seconds after they were distrusted; TDCP resumes.
+    CarriersTrusted { t: f64, after_s: f64 },
     /// How the initial attitude was found.
     Aligned {
         t: f64,
@@ -107,12 +110,16 @@ impl std::fmt::Display for Event {
                 widened,
             } => write!(
                 f,
-                "{t:.3} gnss back after {gap_s:.1} s without a pseudorange used: the single point fix is {offset_m:.1} m away{}; carriers restarted (Doppler until they are trusted)",
+                "{t:.3} gnss back after {gap_s:.1} s without a pseudorange used: the single point fix is {offset_m:.1} m away{}; carrier differencing restarted",
                 if *widened { ", beyond the covariance: uncertainty widened and the fix fused" } else { ", within the covariance" }
             ),
             Event::CarriersDistrusted { t, flagged, of } => write!(
                 f,
                 "{t:.3} carriers of {flagged} of {of} satellites disagree with the INS at once (its velocity, not slips): TDCP paused, Doppler used"
+            ),
+            Event::CarriersTrusted { t, after_s } => write!(
+                f,
+                "{t:.3} carriers agree with the INS again after {after_s:.1} s: TDCP resumed"
             ),
             Event::Aligned { t, method, rpy_deg } => write!(
                 f,

@@ -95,6 +95,14 @@ pub struct BenchArgs {
     pub smooth: bool,
     /// `navfuse report` on one simulated hour at 200 Hz instead.
     pub report: bool,
+    /// The TDCP sweep instead: tight coupling with TDCP against Doppler over random
+    /// sites and start times, with and without an outage (issue 30 part A).
+    pub tdcp_sweep: bool,
+    /// With `tdcp_sweep`: the number of simulated drives.
+    pub runs: usize,
+    /// With `tdcp_sweep`: the sweep's seed (sites, start times, outages, the
+    /// simulator's seeds).
+    pub seed: u64,
     /// With `tight`: seconds of data to simulate and navigate.
     pub duration_s: f64,
     /// With `tight`: a scenario file in place of the built-in one.
@@ -112,9 +120,13 @@ pub struct BenchArgs {
 
 /// With `tight`: the default of [`BenchArgs::duration_s`] \[s\].
 pub const BENCH_TIGHT_DEFAULT_DURATION_S: f64 = bench::tight::DEFAULT_DURATION_S;
+/// With `tdcp_sweep`: the default of [`BenchArgs::runs`].
+pub const BENCH_TDCP_SWEEP_DEFAULT_RUNS: usize = bench::tdcp_sweep::DEFAULT_RUNS;
 
 /// `navfuse bench`: loose coupling on the KF-GINS stand-in, or with `tight` tight
-/// coupling on a simulated drive. Prints the figures on stdout.
+/// coupling on a simulated drive (`smooth`, `report`: the smoother, the report;
+/// `tdcp_sweep`: TDCP against Doppler over random drives, an error on FAIL). Prints
+/// the figures on stdout.
 pub fn bench(a: &BenchArgs) -> Result<()> {
     if a.tune_seeds > 0 {
         tuning::main(&tuning::TuneBenchArgs {
@@ -122,6 +134,8 @@ pub fn bench(a: &BenchArgs) -> Result<()> {
             sim_only: a.tune_sim_only,
             json: a.json,
         })
+    } else if a.tdcp_sweep {
+        bench::tdcp_sweep::main(a.runs, a.seed, a.json, false)
     } else if a.report {
         bench::report::main(a.repeat, a.json)
     } else if a.smooth {

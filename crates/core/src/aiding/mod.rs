@@ -10,6 +10,8 @@
 
 pub mod baro;
 pub mod doppler;
+#[cfg(test)]
+mod epoch_tests;
 pub mod gnss_integrity;
 pub mod gnss_loose;
 pub mod gnss_position;
@@ -147,6 +149,19 @@ impl Aiding<'_> {
                 | Aiding::Zupt(_)
                 | Aiding::Zaru(..)
         )
+    }
+
+    /// Whether the prediction holds more than the state: a quantity fixed at the
+    /// start of the epoch (TDCP: the INS displacement since the previous epoch, and
+    /// the lever arm at the epoch's attitude), which a feedback does not move. Such
+    /// rows, fused one after another and each re-linearised, would apply the same
+    /// correction again (issue 30: the INS velocity corrected once per satellite);
+    /// they are fused together, linearised at the state before any of them
+    /// ([`source::Fuser::fuse_epoch`]). Pseudorange and Doppler predict from the
+    /// state alone (position, velocity, attitude, clock), so their rows may be fused
+    /// one at a time, each re-linearised at the state the previous left.
+    pub fn epoch_fixed(&self) -> bool {
+        matches!(self, Aiding::Tdcp(..))
     }
 
     /// The measurement model; None when the measurement has nothing to offer

@@ -11,6 +11,7 @@
 use crate::aiding::{Aiding, AidingContext, Linearized, ReceiverClock, VehicleEstimate};
 use crate::events::{AidStatus, Event, InnovationRow, RunSummary, UpdateKind};
 use crate::filter::UpdateOutcome;
+use crate::smoother::em::FusedUpdate;
 use crate::integrity::IntegrityState;
 use crate::nav::ins_filter::{BlockProcess, BlockSpec, Fused, InsFilter};
 use crate::nav::timeline::TimeDirection;
@@ -394,6 +395,166 @@ impl Fuser<'_> {
         }
     }
 
+    /// Fuse the measurements of one epoch linearised together at the current state
+    /// (none fused in between): `rows` as (name, model), each of one or more rows,
+    /// applied as `how` says. Carrier-phase measurements need this: their prediction
+    /// holds quantities fixed at the epoch's start (TDCP: the INS displacement since
+    /// the previous epoch), so re-linearising them one after another's feedback would
+    /// apply the same correction again ([`Aiding::epoch_fixed`]).
+    ///
+    /// Bookkeeping per scalar row, under its name: an innovations.csv row with its
+    /// innovation given the rows before it, e_i, and its share of the NIS, e_i^2 / s_i
+    /// (the sequential decomposition, [`crate::filter::RowTerms`]: the same in both
+    /// modes, and the shares sum to the joint NIS), `aiding_used` / `aiding_rejected`
+    /// and the NIS statistics per row. Returns the correction fed back (Applied when
+    /// any row was applied).
+    pub fn fuse_epoch(&mut self, rows: &[(&'static str, &Linearized)], how: EpochUpdate) -> Fused {
+        self.flush_covariance();
+        let lins: Vec<&Linearized> = rows.iter().map(|(_, l)| *l).collect();
+        let Some(stacked) = stack_rows(&lins, self.ins.layout.len()) else {
+            return Fused::NotApplicable;
+        };
+        let names: Vec<&'static str> = rows
+            .iter()
+            .flat_map(|(name, l)| std::iter::repeat_n(*name, l.y.len()))
+            .collect();
+        let t = self.time_gnss();
+        // Noise identification's log, taken at the state all rows are linearised at.
+        let entries: Vec<Option<FusedUpdate>> = rows
+            .iter()
+            .map(|(name, l)| self.ins.update_entry(t, name, l))
+            .collect();
+        // Per row: (e_i, s_i, outcome), and the total correction.
+        let (per_row, gate, dx) = match how {
+            EpochUpdate::OneShot { gate } => {
+                let (out, terms) = self.ins.update_joint(&stacked, gate);
+                let kind = match &out {
+                    UpdateOutcome::Applied { .. } => UpdateKind::Applied,
+                    UpdateOutcome::Rejected { nis, threshold, .. } => {
+                        if let Some(name) = rows.first().map(|r| r.0) {
+                            self.record.events.push(Event::Rejected {
+                                t,
+                                source: name,
+                                nis: *nis,
+                                threshold: *threshold,
+                            });
+                        }
+                        UpdateKind::Rejected
+                    }
+                    UpdateOutcome::Singular => UpdateKind::Singular,
+                };
+                let per_row = match terms {
+                    Some(r) => (0..names.len())
+                        .map(|i| (r.innovation[i], r.variance[i], kind))
+                        .collect(),
+                    None => vec![(f64::NAN, f64::NAN, kind); names.len()],
+                };
+                let dx = match out {
+                    UpdateOutcome::Applied { dx, .. } => Some(dx),
+                    _ => None,
+                };
+                (per_row, None, dx)
+            }
+            EpochUpdate::Sequential { row_gate } => {
+                match self.ins.update_sequential(&stacked, row_gate) {
+                    Some((dx, r)) => {
+                        let any = r.iter().any(|x| x.applied);
+                        let per_row: Vec<(f64, f64, UpdateKind)> = r
+                            .into_iter()
+                            .map(|x| {
+                                let (e, s) = (x.innovation, x.variance);
+                                let kind = if x.applied {
+                                    UpdateKind::Applied
+                                } else if s > 0.0 && e.is_finite() {
+                                    UpdateKind::Rejected
+                                } else {
+                                    UpdateKind::Singular
+                                };
+                                (e, s, kind)
+                            })
+                            .collect();
+                        (per_row, row_gate, any.then_some(dx))
+                    }
+                    // Correlated rows cannot be taken one at a time.
+                    None => return self.fuse_epoch(rows, EpochUpdate::OneShot { gate: None }),
+                }
+            }
+        };
+        if let Some(log) = self.ins.update_log.as_mut() {
+            let mut first = 0;
+            for ((_, l), entry) in rows.iter().zip(entries) {
+                let n = l.y.len();
+                let applied = per_row[first..first + n]
+                    .iter()
+                    .all(|r| r.2 == UpdateKind::Applied);
+                if let (true, Some(e)) = (applied, entry) {
+                    log.push(e);
+                }
+                first += n;
+            }
+        }
+        let st = &mut *self.status;
+        st.innovation.clear();
+        let mut joint_nis = 0.0;
+        for (&name, &(e, s, kind)) in names.iter().zip(&per_row) {
+            let nis = e * e / s;
+            st.innovation.push(e);
+            if kind != UpdateKind::Singular {
+                let stats = self.record.innovation_stats.entry(name).or_default();
+                stats.note(t, &[e], &[s, f64::NAN, f64::NAN], nis, s.ln());
+            }
+            if let Some(log) = self.ins.innovations.as_mut() {
+                log.push(InnovationRow {
+                    t,
+                    source: name,
+                    rows: 1,
+                    innovation: [e, f64::NAN, f64::NAN],
+                    nis: if kind == UpdateKind::Singular {
+                        f64::NAN
+                    } else {
+                        nis
+                    },
+                    gate,
+                    outcome: kind,
+                });
+            }
+            match kind {
+                UpdateKind::Applied => {
+                    let acc = self.record.aiding_nis.entry(name).or_default();
+                    *acc = (acc.0 + nis, acc.1 + 1);
+                    *self.record.aiding_used.entry(name).or_default() += 1;
+                    st.fused += 1;
+                    joint_nis += nis;
+                }
+                UpdateKind::Rejected | UpdateKind::Singular => {
+                    *self.record.aiding_rejected.entry(name).or_default() += 1;
+                    st.rejected += 1;
+                }
+            }
+        }
+        st.test_ratio = None;
+        match dx {
+            Some(dx) => {
+                st.nis = Some(joint_nis);
+                st.last_fused = true;
+                st.last_fused_t = Some(t);
+                Fused::Applied(dx)
+            }
+            None => {
+                st.last_fused = false;
+                if per_row.iter().all(|r| r.2 == UpdateKind::Singular) {
+                    st.nis = None;
+                    if let Some(name) = rows.first().map(|r| r.0) {
+                        self.record.events.push(Event::Singular { t, source: name });
+                    }
+                    Fused::Singular
+                } else {
+                    Fused::Rejected
+                }
+            }
+        }
+    }
+
     /// A row dropped by a joint test (data snooping) counts as rejected.
     pub fn count_rejected(&mut self, name: &'static str) {
         *self.record.aiding_rejected.entry(name).or_default() += 1;
@@ -416,6 +577,20 @@ impl Fuser<'_> {
             self.ins.six_state_out = six.solution(&self.ins.nav);
         }
     }
+}
+
+/// How [`Fuser::fuse_epoch`] applies the measurements of one epoch.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum EpochUpdate {
+    /// One stacked update, gated jointly (`gate` on the joint NIS, as many degrees of
+    /// freedom as rows; a rejection is an [`Event::Rejected`] under the first name).
+    OneShot { gate: Option<f64> },
+    /// Row by row ([`crate::filter::Eskf::update_sequential`]): each row's prediction
+    /// includes the corrections of the rows before it (innovation y_i - H_i dx), each
+    /// row gated alone (`row_gate`, 1 dof), one feedback at the end. Ungated, the same
+    /// state as `OneShot`. Needs uncorrelated rows (diagonal R); correlated ones are
+    /// fused one-shot.
+    Sequential { row_gate: Option<f64> },
 }
 
 /// Chi-square gate for `dof` rows at tail probability `p`.

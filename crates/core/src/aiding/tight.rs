@@ -6,9 +6,17 @@
 //! Policy: the clock bias is (re)set from the pseudoranges when needed; range rates
 //! are fused before the pseudoranges (TDCP compares the carrier with the INS
 //! displacement since the previous epoch, which must still match the state); each
-//! kind is tested jointly per satellite (data snooping) and fused as scalar updates.
+//! kind is tested jointly per satellite (data snooping). Pseudoranges and Doppler
+//! are then fused as scalar updates, each re-linearised at the state the previous
+//! left; the TDCP rows of an epoch as one joint update, linearised together before
+//! any of them (`Aiding::epoch_fixed`, `Fuser::fuse_epoch`: their prediction holds
+//! the INS displacement of the interval, which a feedback does not move). A
+//! satellite without a TDCP row applied (no carrier, a restart, a slip, the
+//! carriers disagreeing with the INS) gives its Doppler instead. The carriers are
+//! tested against the INS every epoch (jointly): most of them disagreeing at once is
+//! the INS velocity off, not slips, and Doppler stands in until they agree again.
 //! After `gate_timeout_s` without a pseudorange used, the single point fix pulls the
-//! solution back first and the carriers restart (Doppler stands in meanwhile).
+//! solution back first and the carrier differencing restarts.
 //!
 //! Several systems (`\[gnss\] systems`): the clock bias b is on GPS time, and each
 //! other system enabled has an inter-system bias state ISB_sys (a random walk in the
@@ -22,7 +30,7 @@
 
 use super::gnss_integrity::GnssGuard;
 use super::pseudorange::isb_block;
-use super::source::{chi2_gate, stack_rows, AidingSource, Fuser, Handled};
+use super::source::{chi2_gate, stack_rows, AidingSource, EpochUpdate, Fuser, Handled};
 use super::tdcp::{Interval, TdcpPrevious};
 use super::{Aiding, Linearized, ReceiverClock};
 use crate::config::{NavConfig, RangeRate, TightOptions};
@@ -35,10 +43,6 @@ use crate::state::{Block, POS, VEL};
 use crate::types::{GnssFix, GnssRawEpoch, ImuSample, Measurement, SatMeasurement};
 use nalgebra::Vector3;
 use std::collections::BTreeMap;
-
-/// After a return from a GNSS gap (or a carrier disagreement), TDCP waits this long
-/// \[s\] for the pseudoranges and Doppler to correct the INS velocity.
-const CARRIER_WARMUP_S: f64 = 5.0;
 
 /// A system unseen for this long \[s\] has its inter-system bias set again from its
 /// pseudoranges when it comes back (the random walk alone would cover a drift of
@@ -65,11 +69,14 @@ pub struct TightGnss {
     prev_lever_ecef_m: Vector3<f64>,
     /// Time of the last epoch with a pseudorange fused (None: none yet).
     last_pr_used_t: Option<f64>,
-    /// TDCP is fused from this time on (after a return from a gap, or an epoch whose
-    /// carriers mostly disagreed with the INS, Doppler stands in until then; None:
-    /// from the start).
-    carriers_trusted_from: Option<f64>,
+    /// Since when the carriers disagree with the INS (most of them at once, tested
+    /// every epoch): TDCP is paused, Doppler stands in (None: they agree).
+    carriers_distrusted_since: Option<f64>,
 }
+
+/// What data snooping leaves: the rows kept with their linearisation, and those
+/// dropped with their (w, blunder).
+type Snooped<'a> = (Vec<(Aiding<'a>, Linearized)>, Vec<(Aiding<'a>, f64, f64)>);
 
 /// Median of the values (reordered), None when empty.
 fn median(v: &mut [f64]) -> Option<f64> {
@@ -100,7 +107,7 @@ impl TightGnss {
             prev_t: None,
             prev_lever_ecef_m: Vector3::zeros(),
             last_pr_used_t: None,
-            carriers_trusted_from: None,
+            carriers_distrusted_since: None,
         })
     }
 
@@ -128,10 +135,15 @@ impl TightGnss {
     /// Fuse with the current clock and remember the correction for the monitor.
     fn fuse(&mut self, f: &mut Fuser, a: Aiding, gate: Option<f64>) -> Fused {
         let r = f.fuse_with_clock(a, gate, Self::clock(f));
-        if let Some(g) = self.guard.as_mut() {
-            g.note(&r);
-        }
+        self.note(&r);
         r
+    }
+
+    /// Remember a correction for the monitor.
+    fn note(&mut self, r: &Fused) {
+        if let Some(g) = self.guard.as_mut() {
+            g.note(r);
+        }
     }
 
     fn update(&mut self, f: &mut Fuser, epoch: &GnssRawEpoch) {
@@ -220,14 +232,15 @@ impl TightGnss {
             RangeRate::None => {}
             RangeRate::Doppler => used |= self.fuse_snooped(f, &doppler, beyond_gate, |_, _, _| {}),
             RangeRate::Tdcp => {
-                let trusted = self
-                    .carriers_trusted_from
-                    .is_none_or(|from| dir.reached(epoch.t, from, 0.0));
-                match self.fuse_tdcp(f, epoch.t, &sats, trusted) {
-                    Some(u) => used |= u,
-                    // Carriers not trusted (yet): the Doppler, when there is one.
-                    None => used |= self.fuse_snooped(f, &doppler, beyond_gate, |_, _, _| {}),
-                }
+                let carried = self.fuse_tdcp(f, epoch.t, &sats);
+                used |= !carried.is_empty();
+                // Each satellite without a carrier row applied (no carrier, none at
+                // the previous epoch, a slip, the carriers paused): its Doppler.
+                let rest: Vec<Aiding> = doppler
+                    .into_iter()
+                    .filter(|a| matches!(a, Aiding::Doppler(s) if !carried.contains(&s.sat)))
+                    .collect();
+                used |= self.fuse_snooped(f, &rest, beyond_gate, |_, _, _| {});
             }
         }
         if self.opt.use_pseudorange {
@@ -314,7 +327,6 @@ impl TightGnss {
         });
         self.clock_set = false;
         self.prev_t = None;
-        self.carriers_trusted_from = Some(f.direction().advance(t, CARRIER_WARMUP_S));
     }
 
     /// Set the clock bias (and drift) states from the measurements at the first
@@ -447,17 +459,12 @@ impl TightGnss {
         f.push_event(Event::ClockReset { t, jump_m: jump });
     }
 
-    /// TDCP of the carriers continuous since the previous epoch, with the slip test;
-    /// `None` when not fused (`trusted` false, or the carriers of most satellites
-    /// disagreeing with the INS at once). The epoch's carriers are remembered either
+    /// TDCP of the carriers continuous since the previous epoch, with the slip test,
+    /// fused as one joint update; returns the satellites whose row was applied (none
+    /// when the carriers of most satellites disagree with the INS at once: paused
+    /// until an epoch where they agree). The epoch's carriers are remembered either
     /// way.
-    fn fuse_tdcp(
-        &mut self,
-        f: &mut Fuser,
-        t: f64,
-        sats: &[SatMeasurement],
-        trusted: bool,
-    ) -> Option<bool> {
+    fn fuse_tdcp(&mut self, f: &mut Fuser, t: f64, sats: &[SatMeasurement]) -> Vec<SatId> {
         let (slip_sigma, slip_min_m) = (self.opt.slip_sigma, self.opt.slip_min_m);
         let nav = *f.nav();
         let c_bn = nav.q_bn.to_rotation_matrix().into_inner();
@@ -488,39 +495,56 @@ impl TightGnss {
             }
             _ => false,
         };
-        // Slips are rare and per satellite; most carriers disagreeing at once is the
-        // INS velocity being off (after an outage): not slips, and no TDCP.
-        let flagged = if trusted {
-            Self::count_blunders(f, &rows, slipped)
-        } else {
-            0
-        };
-        let storm = flagged >= 3 && 2 * flagged > rows.len();
-        let used = if !trusted {
-            None
-        } else if storm {
-            f.push_event(Event::CarriersDistrusted {
-                t,
-                flagged,
-                of: rows.len(),
-            });
-            self.carriers_trusted_from = Some(f.direction().advance(t, CARRIER_WARMUP_S));
-            None
-        } else {
-            let mut slips = Vec::new();
-            let used = self.fuse_snooped(f, &rows, slipped, |a, w, blunder| {
-                if let Aiding::Tdcp(s, _, iv) = a {
-                    slips.push(Event::CycleSlip {
+        // Slips are rare and per satellite: the data snooping removes them one at a
+        // time (the worst first, then the rest tested again). Most carriers removed
+        // is the INS velocity being off (after an outage, or a covariance that does
+        // not cover its error), not slips: no TDCP this epoch; the carriers are tested
+        // again at the next (one large slip alone flags the others too in the first
+        // joint test, so the count is of the rows removed, not of those flagged).
+        let mut carried = Vec::new();
+        if !rows.is_empty() {
+            let (keep, dropped) = Self::snoop(f, &rows, slipped);
+            let storm = dropped.len() >= 3 && 2 * dropped.len() > rows.len();
+            if storm {
+                if self.carriers_distrusted_since.is_none() {
+                    self.carriers_distrusted_since = Some(t);
+                    f.push_event(Event::CarriersDistrusted {
                         t,
-                        sat: s.sat,
-                        jump_m: blunder * iv.dt_s,
-                        w,
+                        flagged: dropped.len(),
+                        of: rows.len(),
                     });
                 }
-            });
-            f.record().events.extend(slips);
-            Some(used)
-        };
+            } else {
+                if let Some(since) = self.carriers_distrusted_since.take() {
+                    f.push_event(Event::CarriersTrusted {
+                        t,
+                        after_s: f.direction().elapsed(since, t),
+                    });
+                }
+                for (a, w, blunder) in &dropped {
+                    if let Aiding::Tdcp(s, _, iv) = a {
+                        f.push_event(Event::CycleSlip {
+                            t,
+                            sat: s.sat,
+                            jump_m: blunder * iv.dt_s,
+                            w: *w,
+                        });
+                    }
+                    f.count_rejected(a.name());
+                }
+                // The rows left are fused together (all or none).
+                let sats: Vec<SatId> = keep
+                    .iter()
+                    .filter_map(|(a, _)| match a {
+                        Aiding::Tdcp(s, ..) => Some(s.sat),
+                        _ => None,
+                    })
+                    .collect();
+                if self.fuse_kept(f, keep) {
+                    carried = sats;
+                }
+            }
+        }
         // Remember this epoch (after the updates: the displacement restarts here).
         self.prev.clear();
         for s in sats {
@@ -538,38 +562,12 @@ impl TightGnss {
         }
         self.prev_t = Some(t);
         f.restart_displacement();
-        used
+        carried
     }
 
-    /// How many of `rows` the joint w-test flags at once (`is_blunder`).
-    fn count_blunders(
-        f: &mut Fuser,
-        rows: &[Aiding],
-        is_blunder: impl Fn(&Aiding, f64, f64) -> bool,
-    ) -> usize {
-        f.flush_covariance();
-        let ctx = f.context(Self::clock(f));
-        let lins: Vec<(Aiding, Linearized)> = rows
-            .iter()
-            .filter_map(|a| a.linearize(&ctx).map(|l| (*a, l)))
-            .collect();
-        let refs: Vec<&Linearized> = lins.iter().map(|(_, l)| l).collect();
-        let Some(stacked) = stack_rows(&refs, ctx.layout.len()) else {
-            return 0;
-        };
-        f.blunder_test(&stacked).map_or(0, |tests| {
-            tests
-                .iter()
-                .zip(&lins)
-                .filter(|((w, b), (a, _))| is_blunder(a, *w, *b))
-                .count()
-        })
-    }
-
-    /// Fuse one-row measurements after data snooping: test them jointly against the
-    /// prior (Baarda's w-test, [`crate::filter::Eskf::blunder_test`]), drop the worst
-    /// while `is_blunder(row, w, blunder)` holds for it (reported through `rejected`
-    /// and counted as rejected), then fuse the rest. True if any was applied.
+    /// Fuse one-row measurements after data snooping ([`TightGnss::snoop`]; each row
+    /// dropped is reported through `rejected` and counted as rejected), then the rest
+    /// ([`TightGnss::fuse_kept`]). True if any was applied.
     fn fuse_snooped(
         &mut self,
         f: &mut Fuser,
@@ -577,6 +575,24 @@ impl TightGnss {
         is_blunder: impl Fn(&Aiding, f64, f64) -> bool,
         mut rejected: impl FnMut(&Aiding, f64, f64),
     ) -> bool {
+        let (keep, dropped) = Self::snoop(f, rows, is_blunder);
+        for (a, w, b) in &dropped {
+            rejected(a, *w, *b);
+            f.count_rejected(a.name());
+        }
+        self.fuse_kept(f, keep)
+    }
+
+    /// Data snooping: test the rows jointly against the prior (Baarda's w-test,
+    /// [`crate::filter::Eskf::blunder_test`]) and drop the worst while
+    /// `is_blunder(row, w, blunder)` holds for it, testing the rest again. Returns the
+    /// rows kept with their linearisation at the current state, and those dropped
+    /// with (w, blunder), in the order dropped.
+    fn snoop<'a>(
+        f: &mut Fuser,
+        rows: &[Aiding<'a>],
+        is_blunder: impl Fn(&Aiding, f64, f64) -> bool,
+    ) -> Snooped<'a> {
         f.flush_covariance();
         let mut keep: Vec<(Aiding, Linearized)> = {
             let ctx = f.context(Self::clock(f));
@@ -584,6 +600,7 @@ impl TightGnss {
                 .filter_map(|a| a.linearize(&ctx).map(|lin| (*a, lin)))
                 .collect()
         };
+        let mut dropped = Vec::new();
         while !keep.is_empty() {
             let lins: Vec<&Linearized> = keep.iter().map(|(_, lin)| lin).collect();
             let Some(stacked) = stack_rows(&lins, f.layout().len()) else {
@@ -601,11 +618,28 @@ impl TightGnss {
                 break;
             };
             let (a, _) = keep.remove(i);
-            rejected(&a, w, b);
-            f.count_rejected(a.name());
+            dropped.push((a, w, b));
         }
+        (keep, dropped)
+    }
+
+    /// Fuse the rows kept by [`TightGnss::snoop`] (nothing fused since): those whose
+    /// prediction is fixed at the epoch's start (`Aiding::epoch_fixed`, TDCP) together
+    /// in one update with the linearisation just tested, then the others one at a
+    /// time, each re-linearised at the state the previous left. True if any was
+    /// applied.
+    fn fuse_kept(&mut self, f: &mut Fuser, keep: Vec<(Aiding, Linearized)>) -> bool {
+        let (joint, single): (Vec<_>, Vec<_>) =
+            keep.into_iter().partition(|(a, _)| a.epoch_fixed());
         let mut used = false;
-        for (a, _) in keep {
+        if !joint.is_empty() {
+            let rows: Vec<(&'static str, &Linearized)> =
+                joint.iter().map(|(a, lin)| (a.name(), lin)).collect();
+            let r = f.fuse_epoch(&rows, EpochUpdate::OneShot { gate: None });
+            self.note(&r);
+            used |= r.applied();
+        }
+        for (a, _) in single {
             used |= self.fuse(f, a, None).applied();
         }
         used

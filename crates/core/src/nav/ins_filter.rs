@@ -13,7 +13,7 @@ use crate::config::{NavConfig, NhcMode};
 use crate::earth::lla_to_ecef;
 use crate::error_model::{fill_f, fill_qc, Discretizer, MeanMotion};
 use crate::events::InnovationRow;
-use crate::filter::{Eskf, UpdateOutcome};
+use crate::filter::{Eskf, RowTerms, SequentialRow, UpdateOutcome};
 use crate::mechanization::Mechanizer;
 use crate::nav::timeline::TimeDirection;
 use crate::six_state::SixState;
@@ -463,6 +463,61 @@ impl InsFilter {
             self.feedback(dx);
         }
         out
+    }
+
+    /// [`InsFilter::update`] of the stacked rows of one epoch, linearised together at
+    /// the state before any of them: one joint update ([`Eskf::update_joint`]), with
+    /// the per-row terms for the bookkeeping.
+    pub(crate) fn update_joint(
+        &mut self,
+        lin: &Linearized,
+        gate: Option<f64>,
+    ) -> (UpdateOutcome, Option<RowTerms>) {
+        let gain = match self.six_state {
+            Some(_) => self.filter.gain(&lin.h, &lin.r),
+            None => None,
+        };
+        let (out, rows) = self.filter.update_joint(&lin.y, &lin.h, &lin.r, gate);
+        if let UpdateOutcome::Applied { dx, .. } = &out {
+            self.applied(dx, gain.as_ref().map(|k| (k, &lin.h)));
+        }
+        (out, rows)
+    }
+
+    /// The same rows one at a time ([`Eskf::update_sequential`]: each innovation less
+    /// the corrections of the rows before it, each row gated alone by `row_gate`), the
+    /// sum of the corrections fed back once; None when `lin.r` is not diagonal. The
+    /// sum, and each row's outcome.
+    pub(crate) fn update_sequential(
+        &mut self,
+        lin: &Linearized,
+        row_gate: Option<f64>,
+    ) -> Option<(DVector<f64>, Vec<SequentialRow>)> {
+        let prior = self.six_state.is_some().then(|| self.filter.clone());
+        let (dx, rows) = self
+            .filter
+            .update_sequential(&lin.y, &lin.h, &lin.r, row_gate)?;
+        let kept: Vec<usize> = (0..rows.len()).filter(|&i| rows[i].applied).collect();
+        if !kept.is_empty() {
+            // GnssFusion::SixState: the gain of the rows applied, over the prior.
+            let h = lin.h.select_rows(&kept);
+            let gain =
+                prior.and_then(|p| p.gain(&h, &lin.r.select_rows(&kept).select_columns(&kept)));
+            self.applied(&dx, gain.as_ref().map(|k| (k, &h)));
+        }
+        Some((dx, rows))
+    }
+
+    /// An update's correction `dx` (with its gain and H under six-state fusion) is
+    /// recorded and fed back.
+    fn applied(&mut self, dx: &DVector<f64>, gain_h: Option<(&DMatrix<f64>, &DMatrix<f64>)>) {
+        if let Some(r) = self.recorder.as_mut() {
+            r.applied(dx);
+        }
+        if let (Some(six), Some((k, h))) = (self.six_state.as_mut(), gain_h) {
+            six.on_dr_update(k, h);
+        }
+        self.feedback(dx);
     }
 
     /// Closed-loop feedback of the error estimate, then implicit reset to zero.

@@ -8,6 +8,7 @@
 
 pub mod report;
 pub mod smooth;
+pub mod tdcp_sweep;
 pub mod tight;
 
 use anyhow::{Context, Result};
