@@ -166,9 +166,9 @@ pub fn sub_windows(samples: &[crate::types::ImuSample], len_s: f64) -> Vec<SubWi
 /// count as static: engine idle is steady, a passenger or a closing door raises it for
 /// a second (2.7x on the real car drive_0708).
 pub const VIBRATION_FACTOR: f64 = 3.0;
-/// A static window's sub-window means of the specific force may differ from their
-/// median by this \[m/s²\] (0.6 deg of tilt; driving off changes them by 0.5-3 m/s²)
-/// plus four times their noise, std / sqrt(n).
+/// A static window's sub-window means of the specific force may differ from each
+/// other by this \[m/s²\] (0.6 deg of tilt; driving off changes them by 0.5-3 m/s²)
+/// plus four times the noise of the difference (std / sqrt(n) of each).
 pub const STILL_MEAN_ACCEL_MPS2: f64 = 0.1;
 /// The same for the angular rate \[rad/s\] (a car turns at 5-30 deg/s).
 pub const STILL_MEAN_RATE: f64 = 0.5 * std::f64::consts::PI / 180.0;
@@ -190,7 +190,8 @@ pub struct ImuStillness {
     /// Thresholds used: max(configured, factor x floor).
     pub accel_threshold: f64,
     pub gyro_threshold: f64,
-    /// Largest sub-window values and mean changes.
+    /// Largest sub-window values, and the largest differences between two
+    /// sub-windows' means.
     pub accel_max: f64,
     pub gyro_max: f64,
     pub mean_f_change: f64,
@@ -230,17 +231,23 @@ pub fn imu_stillness(
         Vector3::from_fn(|i, _| median(subs.iter().map(|s| f(s)[i]).collect()))
     };
     let (mf, mw) = (med3(&|s| s.mean_f), med3(&|s| s.mean_w));
+    // Every pair of sub-windows: their means within the tolerance plus 4 times the
+    // noise of their difference (a change mid-window, not only a drift from the median).
     let mut mean_f_change: f64 = 0.0;
     let mut mean_w_change: f64 = 0.0;
     let mut means_steady = true;
-    for s in subs {
-        let n = (s.samples as f64).max(1.0).sqrt();
-        let df = (s.mean_f - mf).norm();
-        let dw = (s.mean_w - mw).norm();
-        mean_f_change = mean_f_change.max(df);
-        mean_w_change = mean_w_change.max(dw);
-        means_steady &= df <= STILL_MEAN_ACCEL_MPS2 + 4.0 * s.accel_std / n
-            && dw <= STILL_MEAN_RATE + 4.0 * s.gyro_std / n;
+    for (i, a) in subs.iter().enumerate() {
+        for b in &subs[i + 1..] {
+            let (na, nb) = (a.samples.max(1) as f64, b.samples.max(1) as f64);
+            let noise_f = (a.accel_std.powi(2) / na + b.accel_std.powi(2) / nb).sqrt();
+            let noise_w = (a.gyro_std.powi(2) / na + b.gyro_std.powi(2) / nb).sqrt();
+            let df = (a.mean_f - b.mean_f).norm();
+            let dw = (a.mean_w - b.mean_w).norm();
+            mean_f_change = mean_f_change.max(df);
+            mean_w_change = mean_w_change.max(dw);
+            means_steady &= df <= STILL_MEAN_ACCEL_MPS2 + 4.0 * noise_f
+                && dw <= STILL_MEAN_RATE + 4.0 * noise_w;
+        }
     }
     let (accel_max, gyro_max) = (fold_max(&a), fold_max(&g));
     let k = subs.len() as f64;
@@ -384,6 +391,75 @@ mod tests {
         assert!(mean_speed(&odo, 10.0).is_none());
         let a = mean_horizontal_accel(&dv, 1.0).unwrap();
         assert!((a - 2.0).abs() < 1e-9, "{a}");
+    }
+
+    /// Sub-windows of an engine's vibration (0.15 m/s², 2.6 deg/s at 27 and 41 Hz, far
+    /// above the 0.05 m/s² / 0.5 deg/s floor) are static, a passenger's bump of 2.5x for
+    /// a second too; driving off at 0.3 m/s² or turning at 3 deg/s is not, nor (without
+    /// GNSS) vibration at 4x its floor.
+    #[test]
+    fn stillness_is_calibrated_to_the_vibration() {
+        use crate::types::ImuSample;
+        let g = Vector3::new(0.0, 0.0, -9.8);
+        let make = |accel: &dyn Fn(f64) -> Vector3<f64>,
+                    rate: &dyn Fn(f64) -> Vector3<f64>,
+                    amp: &dyn Fn(f64) -> f64| {
+            (1..=1000)
+                .map(|k| {
+                    let t = k as f64 * 0.01;
+                    let v = amp(t);
+                    let vib = |p: f64| {
+                        (2.0 * std::f64::consts::PI * 27.0 * t + p).sin()
+                            + (2.0 * std::f64::consts::PI * 41.0 * t + 2.0 * p).sin()
+                    };
+                    let f = accel(t) + Vector3::new(vib(0.1), vib(1.3), vib(2.2)) * 0.0866 * v;
+                    let w = rate(t) + Vector3::new(vib(0.7), vib(1.9), vib(2.9)) * 0.0262 * v;
+                    ImuSample {
+                        t,
+                        dt: 0.01,
+                        dtheta: w * 0.01,
+                        dvel: f * 0.01,
+                    }
+                })
+                .collect::<Vec<_>>()
+        };
+        let still = |s: &[ImuSample]| {
+            imu_stillness(&sub_windows(s, 1.0), 0.05, 0.5f64.to_radians()).unwrap()
+        };
+        let idle = still(&make(&|_| g, &|_| Vector3::zeros(), &|_| 1.0));
+        assert!(idle.is_static && idle.means_steady, "{idle:?}");
+        assert!(
+            idle.accel_median > 0.12 && idle.gyro_median > 2f64.to_radians(),
+            "{idle:?}"
+        );
+        let bump = still(&make(&|_| g, &|_| Vector3::zeros(), &|t| {
+            if (4.0..5.0).contains(&t) {
+                2.5
+            } else {
+                1.0
+            }
+        }));
+        assert!(bump.is_static, "{bump:?}");
+        let drive = still(&make(
+            &|t| g + Vector3::new(0.3 * (t - 5.0).max(0.0).min(1.0), 0.0, 0.0),
+            &|_| Vector3::zeros(),
+            &|_| 1.0,
+        ));
+        assert!(!drive.means_steady, "{drive:?}");
+        let turn = still(&make(
+            &|_| g,
+            &|t| Vector3::new(0.0, 0.0, if t > 5.0 { 3f64.to_radians() } else { 0.0 }),
+            &|_| 1.0,
+        ));
+        assert!(!turn.means_steady, "{turn:?}");
+        let rough = still(&make(&|_| g, &|_| Vector3::zeros(), &|t| {
+            if t > 5.0 {
+                4.0
+            } else {
+                1.0
+            }
+        }));
+        assert!(rough.means_steady && !rough.is_static, "{rough:?}");
     }
 
     #[test]

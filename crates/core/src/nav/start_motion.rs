@@ -337,6 +337,12 @@ pub(crate) fn search<E>(
             while j + 1 < v.len() && v[j + 1].t <= t_i + span + 1e-9 {
                 j += 1;
             }
+            // Past the look-ahead: stop before reading (and holding) the IMU that far.
+            if let (Some(lim), Some(a)) = (max_buffer_s, buf.front()) {
+                if v[j].t - a.t > lim {
+                    return Ok(SearchEnd::Limit);
+                }
+            }
             if !fill_until(buf, imu, v[j].t + 0.03)? {
                 ended = true;
                 let t_last = buf.back().map_or(f64::NEG_INFINITY, |s| s.t);
