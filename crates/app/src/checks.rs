@@ -138,8 +138,12 @@ pub(crate) fn after_run(cfg: &RunConfig, job: &JobResult, a: &AfterRun) -> Vec<F
     }
     let land = cfg.nav.nhc.mode != NhcMode::Off || cfg.nav.odometer.enabled;
     for e in &job.summary.events {
-        if let navfuse_core::Event::Aligned { rpy_deg, .. } = e {
+        if let navfuse_core::Event::Aligned {
+            rpy_deg, method, ..
+        } = e
+        {
             found.extend(plausibility::aligned_tilt(*rpy_deg, land));
+            found.extend(plausibility::aligned_yaw_unknown(method));
         }
     }
     found

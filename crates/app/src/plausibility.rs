@@ -613,6 +613,20 @@ pub fn aligned_tilt(rpy_deg: [f64; 3], land_vehicle: bool) -> Vec<Finding> {
     Vec::new()
 }
 
+/// The alignment could not find the yaw from the data (`method` of the events line).
+pub fn aligned_yaw_unknown(method: &str) -> Vec<Finding> {
+    let what = if method.contains("yaw unknown") {
+        "the yaw starts at 0 deg"
+    } else if method.contains("yaw uncertain") {
+        "the yaw starts from the course of a single GNSS epoch, maybe its velocity noise"
+    } else {
+        return Vec::new();
+    };
+    vec![Finding::warning(format!(
+        "the data did not give the initial yaw (no GNSS course clear of the velocity noise, no horizontal acceleration the velocity matching could use, gyros too coarse to gyrocompass): {what} (events.log, aligned line); give [initial] attitude_deg"
+    ))]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

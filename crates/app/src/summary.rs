@@ -154,6 +154,28 @@ impl JobResult {
             "events": s.events.iter().map(|e| e.to_string()).collect::<Vec<_>>(),
             "files": self.files.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
         });
+        if let Some(navfuse_core::Event::Aligned {
+            t,
+            method,
+            rpy_deg,
+            reason,
+            skipped_s,
+        }) = s
+            .events
+            .iter()
+            .find(|e| matches!(e, navfuse_core::Event::Aligned { .. }))
+        {
+            // Which alignment ran and why (also the events line).
+            v["alignment"] = serde_json::json!({
+                "t": t,
+                "method": method,
+                "roll_deg": rpy_deg[0],
+                "pitch_deg": rpy_deg[1],
+                "yaw_deg": rpy_deg[2],
+                "reason": reason,
+                "imu_skipped_s": skipped_s,
+            });
+        }
         if s.gnss_sats_ignored > 0 {
             // Tight coupling: measurements of systems not in `[gnss] systems`.
             v["gnss"]["sats_ignored"] = s.gnss_sats_ignored.into();

@@ -48,11 +48,16 @@ pub enum Event {
     /// Tight coupling: the carriers agree with the INS again (tested every epoch),
     /// `after_s` seconds after they were distrusted; TDCP resumes.
     CarriersTrusted { t: f64, after_s: f64 },
-    /// How the initial attitude was found.
+    /// How the initial attitude was found, and why that way (what the data showed;
+    /// IMU data before the start not navigated; empty when there is nothing to say).
     Aligned {
         t: f64,
         method: &'static str,
         rpy_deg: [f64; 3],
+        reason: String,
+        /// IMU data read from the start time on but before the start, not navigated
+        /// \[s\] (0: everything read is navigated).
+        skipped_s: f64,
     },
     /// The vehicle came to rest / started moving (static detector).
     Static { t: f64, begins: bool },
@@ -121,11 +126,24 @@ impl std::fmt::Display for Event {
                 f,
                 "{t:.3} carriers agree with the INS again after {after_s:.1} s: TDCP resumed"
             ),
-            Event::Aligned { t, method, rpy_deg } => write!(
-                f,
-                "{t:.3} aligned ({method}): roll {:.3} pitch {:.3} yaw {:.3} deg",
-                rpy_deg[0], rpy_deg[1], rpy_deg[2]
-            ),
+            Event::Aligned {
+                t,
+                method,
+                rpy_deg,
+                reason,
+                ..
+            } => {
+                write!(
+                    f,
+                    "{t:.3} aligned ({method}): roll {:.3} pitch {:.3} yaw {:.3} deg",
+                    rpy_deg[0], rpy_deg[1], rpy_deg[2]
+                )?;
+                if reason.is_empty() {
+                    Ok(())
+                } else {
+                    write!(f, "; {reason}")
+                }
+            }
             Event::ClockReset { t, jump_m } => write!(
                 f,
                 "{t:.3} receiver clock bias set from the pseudoranges (step {jump_m:.1} m)"

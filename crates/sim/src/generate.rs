@@ -261,6 +261,11 @@ pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError>
     let imu_rate = sc.imu.rate_hz;
     let mut gen = TruthGenerator::new(traj, sc.rig, imu_rate);
     let mut imu_model = ImuErrorModel::new(&sc.imu_grade, seed);
+    let vibration = sc
+        .file
+        .vibration
+        .as_ref()
+        .map(|v| crate::vibration::Vibration::new(v, seed));
 
     // Scenario copy, for provenance.
     {
@@ -622,7 +627,18 @@ pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError>
         k += 1;
         // Odometer distance of the vehicle reference point (trapezoid at the IMU rate).
         distance += 0.5 * (cur.speed + next.speed) * imu_true.dt;
-        let (dth, dv) = imu_model.apply(imu_true.dt, &imu_true.dtheta, &imu_true.dvel);
+        let (dth, dv) = match &vibration {
+            // Engine vibration: zero-mean, exact over the interval (not in the truth).
+            Some(v)
+                if v.when == crate::vibration::VibrationWhen::Always
+                    || cur.speed.abs().max(next.speed.abs()) < 0.01 =>
+            {
+                let a = imu_true.t - imu_true.dt - traj.t_start();
+                let (vth, vv) = v.increments(a, a + imu_true.dt);
+                imu_model.apply(imu_true.dt, &(imu_true.dtheta + vth), &(imu_true.dvel + vv))
+            }
+            _ => imu_model.apply(imu_true.dt, &imu_true.dtheta, &imu_true.dvel),
+        };
         line.clear();
         push_fixed9(&mut line, imu_true.t);
         // Shortest round-trip decimal of each value: a fixed 9 decimals would round a

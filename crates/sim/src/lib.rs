@@ -8,6 +8,7 @@
 //! - the Allan deviation that checks the IMU models is `navfuse_core::allan`.
 //! - [`gnss_sim`]: constellation, raw measurements with an error budget, DGPS, fixes,
 //!   dual-antenna heading, events.
+//! - [`vibration`]: engine-like vibration added to the IMU (`[vibration]`).
 //! - [`generate`]: one streaming pass that writes every output file.
 
 pub mod baro_sim;
@@ -18,3 +19,4 @@ pub mod random;
 pub mod run_config;
 pub mod scenario;
 pub mod trajectory;
+pub mod vibration;

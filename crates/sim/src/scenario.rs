@@ -29,6 +29,9 @@ pub struct ScenarioFile {
     pub vehicle: VehicleSpec,
     #[serde(default)]
     pub imu: Option<ImuSpec>,
+    /// Engine-like vibration of the IMU (vibration.rs).
+    #[serde(default)]
+    pub vibration: Option<crate::vibration::VibrationSpec>,
     #[serde(default)]
     pub odometer: Option<OdometerSpec>,
     /// Simulated barometer (baro_sim.rs).
@@ -435,6 +438,10 @@ impl Scenario {
                 n.round() as u64
             }
         };
+        if let Some(v) = &file.vibration {
+            v.validate()
+                .map_err(|(k, m)| key_err(path, &text, &format!("vibration.{k}"), Some(&k), m))?;
+        }
         if let Some(o) = &file.odometer {
             let ok = o.rate_hz.is_finite()
                 && o.rate_hz > 0.0

@@ -85,6 +85,8 @@ pub fn run_backward<E: From<NavError>>(
     n.push_event(Event::Aligned {
         t: start.t,
         method: "given (backward start)",
+        reason: String::new(),
+        skipped_s: 0.0,
         rpy_deg: [
             start.rpy.x.to_degrees(),
             start.rpy.y.to_degrees(),

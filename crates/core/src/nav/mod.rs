@@ -8,9 +8,12 @@ pub mod ins_filter;
 pub mod navigator;
 pub mod run;
 pub(crate) mod start;
+pub(crate) mod start_motion;
 pub mod timeline;
 
 #[cfg(test)]
 mod backward_tests;
+#[cfg(test)]
+mod start_tests;
 #[cfg(test)]
 pub(crate) mod tests;

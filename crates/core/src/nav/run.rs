@@ -150,8 +150,31 @@ fn drive<E: From<NavError>>(
         Some(r) => r?,
         None => return Ok(RunSummary::default()),
     };
+    let t_first_read = first.t;
     let Some(start) = find_start(cfg, first, &mut imu, measurements)? else {
         return Ok(RunSummary::default());
+    };
+    // What the alignment learnt about the data: its attitude uncertainty, the IMU
+    // biases, the vibration of a static start (ZUPT thresholds).
+    let adapted;
+    let cfg = if start.att_std.is_some() || start.zupt_thresholds.is_some() || start.bias.is_some()
+    {
+        let mut c = cfg.clone();
+        if let Some((g, a)) = start.bias {
+            c.initial.imu_errors.gyro_bias += g;
+            c.initial.imu_errors.accel_bias += a;
+        }
+        if let Some(a) = start.att_std {
+            c.initial.att_std = a;
+        }
+        if let Some((a, g)) = start.zupt_thresholds {
+            c.zupt.accel_std_max = a;
+            c.zupt.gyro_max = g;
+        }
+        adapted = c;
+        &adapted
+    } else {
+        cfg
     };
     let mut sources = registry::sources(cfg, start.t0);
     sources.extend(extra_sources(cfg, start.t0));
@@ -175,6 +198,8 @@ fn drive<E: From<NavError>>(
     n.push_event(Event::Aligned {
         t: start.t0,
         method: start.method,
+        reason: start.reason.clone(),
+        skipped_s: start.t0 - t_first_read,
         rpy_deg: [
             start.rpy.x.to_degrees(),
             start.rpy.y.to_degrees(),

@@ -5,7 +5,11 @@
 
 use crate::attitude::c_bn_from_euler;
 use crate::types::{GnssFix, ImuSample};
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
+
+#[cfg(test)]
+pub(crate) mod synth;
+pub(crate) mod velocity_match;
 
 /// Roll and pitch \[rad\] from the mean specific force in the body frame while static:
 /// f^b = C_n^b (0, 0, -g), so roll = atan2(-f_y, -f_z), pitch = atan2(f_x, |f_yz|).
@@ -57,31 +61,9 @@ pub fn gyrocompass_yaw(mean_w_b: &Vector3<f64>, roll: f64, pitch: f64) -> f64 {
     (-w_l.y).atan2(w_l.x)
 }
 
-/// In-motion coarse attitude (C_b^n) from the vehicle course over ground `course`
-/// \[rad\], the mean body specific force `mean_f_b` \[m/s²\] and the NED acceleration
-/// `a_n` \[m/s²\] over the same span (from GNSS velocities), gravity `g` \[m/s²\], and
-/// the IMU mounting C_b^m. Vehicle roll and pitch solve C_n^m (a^n - g^n) = C_b^m f^b
-/// by levelling on the acceleration-corrected specific force (fixed point; the
-/// acceleration is small next to g), yaw of the vehicle = course.
-pub fn in_motion_attitude(
-    course: f64,
-    mean_f_b: &Vector3<f64>,
-    a_n: &Vector3<f64>,
-    c_bm: &Matrix3<f64>,
-) -> Matrix3<f64> {
-    let f_m = c_bm * mean_f_b;
-    let (mut roll, mut pitch) = level(&f_m);
-    for _ in 0..8 {
-        let c_nm = c_bn_from_euler(&Vector3::new(roll, pitch, course)).transpose();
-        (roll, pitch) = level(&(f_m - c_nm * a_n));
-    }
-    c_bn_from_euler(&Vector3::new(roll, pitch, course)) * c_bm
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::attitude::euler_from_c_bn;
     use crate::earth::omega_ie_n;
 
     #[test]
@@ -128,21 +110,5 @@ mod tests {
             let y = gyrocompass_yaw(&w_b, rpy.x, rpy.y);
             assert!((y - yaw).abs() < 1e-9, "{y} {yaw}");
         }
-    }
-
-    /// Accelerating and climbing with the IMU mounted off-axis: the body attitude is
-    /// recovered from course, GNSS acceleration and specific force.
-    #[test]
-    fn in_motion_attitude_recovers_body_attitude() {
-        let g_n = Vector3::new(0.0, 0.0, 9.8);
-        let c_bm = c_bn_from_euler(&Vector3::new(0.01, 0.03, -0.05));
-        let vehicle = Vector3::new(0.04, 0.06, 1.2);
-        let c_mn = c_bn_from_euler(&vehicle);
-        let c_bn = c_mn * c_bm;
-        let a_n = Vector3::new(0.8, 1.5, -0.1);
-        let f_b = c_bn.transpose() * (a_n - g_n);
-        let c = in_motion_attitude(vehicle.z, &f_b, &a_n, &c_bm);
-        let e = euler_from_c_bn(&(c * c_bn.transpose()));
-        assert!(e.norm() < 1e-9, "{e:?}");
     }
 }
