@@ -145,7 +145,13 @@ pub fn run_config(sc: &Scenario, dir: &Path) -> RunConfig {
         )
     };
     let mut nav = NavConfig::new(imu_noise, initial);
-    nav.start_time = t0;
+    // The IMU clock runs `[gnss] time_offset_s` ahead of GPS time (generate.rs): the
+    // run starts at that IMU time and estimates the offset (from the default prior).
+    let tau = sc.file.gnss.as_ref().map_or(0.0, |g| g.time_offset_s);
+    nav.start_time = t0 + tau;
+    if tau != 0.0 {
+        nav.filter.time_offset = Some(Default::default());
+    }
     let mut gnss = None;
     let mut heading = None;
     if let Some(gs_) = &sc.file.gnss {
