@@ -191,20 +191,24 @@ fn search(
     );
     let mut blocks = ImuBlocks::new();
     let (mut t_first, mut t_last) = (f64::NAN, f64::NAN);
-    for r in open_imu(&cfg.imu)? {
-        let s = opts.stop_check(r.map_err(Error::from))?;
-        if s.t - s.dt < start {
-            continue;
+    let mut read = || -> Result<(), Error> {
+        for r in open_imu(&cfg.imu)? {
+            let s = opts.stop_check(r.map_err(Error::from))?;
+            if s.t - s.dt < start {
+                continue;
+            }
+            if s.t > end {
+                break;
+            }
+            if t_first.is_nan() {
+                t_first = s.t - s.dt;
+            }
+            t_last = s.t;
+            blocks.push(&s);
         }
-        if s.t > end {
-            break;
-        }
-        if t_first.is_nan() {
-            t_first = s.t - s.dt;
-        }
-        t_last = s.t;
-        blocks.push(&s);
-    }
+        Ok(())
+    };
+    read().context("time-offset search")?;
     if t_last.is_nan() || t_last <= t_first {
         return Ok(None);
     }

@@ -22,7 +22,7 @@ const OUTAGE_S: f64 = 120.0;
 
 /// Per seed: scale error and 1-sigma at the outage start [ppm], drift in the outage [m].
 fn runs(rate_hz: u32, seeds: u64) -> Vec<(f64, f64, f64)> {
-    let base = tmp(&format!("odometer-noise-{rate_hz}"));
+    let base = tmp(&format!("odometer-noise-{rate_hz}-{seeds}"));
     std::fs::create_dir_all(&base).unwrap();
     let text = std::fs::read_to_string(repo().join("scenarios/odometer_noise_car.toml")).unwrap();
     let key = "rate_hz = 10\nmeters_per_pulse";

@@ -11,9 +11,8 @@
 //! speed-dependent std, and biased k low (errors in variables, REFERENCES [FUL87]), the
 //! more so the more records (0.1 m/s of noise at 100 Hz: -891 ppm, -8.2 sigma).
 //!
-//! The forward row leaves the mounting out (seed 004's H_alpha, SYSTEM.md §4b): its
-//! sensitivity to the mounting is second order. With `nhc_std`, the lateral and
-//! vertical rows (v^m = \[v 0 0\]^T, seed 004's three-row measurement) are appended.
+//! With `nhc_std`, the lateral and vertical rows (v^m = \[v 0 0\]^T, seed 004's
+//! three-row measurement) are appended.
 //!
 //! Below `calibration_min_speed_mps` of predicted or INS speed the scale and mounting
 //! columns are zeroed: near standstill the scale is unobservable and noise would drive
@@ -58,15 +57,8 @@ pub fn linearize(
     if let Some(i) = ctx.layout.index(Block::OdometerScale) {
         h[(0, i)] = if calibrate { -s_pred * inv } else { 0.0 };
     }
-    if let Some(i) = ctx.layout.index(Block::Mounting) {
-        // The forward row has no mounting columns (SYSTEM.md §4b: H_alpha row 1 =
-        // [v 0 0]): its sensitivity (-v^m_z, v^m_y) is an error times an error; fed to
-        // the filter it let unobservable mounting errors drive k (-655 ppm at 100 Hz
-        // without NHC, RESULTS.md §16).
-        h.view_mut((0, i), (1, 2)).fill(0.0);
-        if !calibrate {
-            h.columns_mut(i, 2).fill(0.0);
-        }
+    if let (false, Some(i)) = (calibrate, ctx.layout.index(Block::Mounting)) {
+        h.columns_mut(i, 2).fill(0.0);
     }
     let mut r = DMatrix::zeros(rows, rows);
     r[(0, 0)] = noise
