@@ -414,6 +414,9 @@ pub fn events_log_text(job: &JobResult) -> String {
     for f in job.findings.iter().filter(|f| !f.is_error()) {
         text.push_str(&format!("# {f}\n"));
     }
+    if let Some(f) = &job.time_offset {
+        text.push_str(&format!("# time offset: {}\n", f.note));
+    }
     for e in &job.summary.events {
         text.push_str(&format!("{e}\n"));
     }

@@ -53,7 +53,7 @@ pub use sink::{
 pub use smooth::SmootherReport;
 pub use stop::{Interrupted, StopFlag};
 pub use summary::{JobResult, Unreliable, EXIT_UNRELIABLE};
-pub use time_offset::TimeOffsetFit;
+pub use time_offset::{TimeOffsetFit, TimeOffsetSource};
 
 /// What a program that runs navfuse usually needs, in one `use`:
 /// `use navfuse_app::prelude::*;`.

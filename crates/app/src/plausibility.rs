@@ -24,7 +24,7 @@ pub const MAX_LEVER_ARM_M: f64 = 5.0;
 /// A time-offset prior this wide \[s\] lets the first pass lock onto a wrong epoch.
 pub const MAX_TIME_OFFSET_STD_S: f64 = 30.0;
 /// Fitted offsets beyond these are reported.
-pub const MAX_TIME_OFFSET_S: f64 = 1.0;
+pub const MAX_TIME_OFFSET_S: f64 = 2.0;
 pub const MAX_TIME_OFFSET_RATE_PPM: f64 = 1000.0;
 /// Below this fraction of usable GNSS epochs used, the reasons are reported.
 pub const MIN_GNSS_USED_FRACTION: f64 = 0.5;

@@ -2,7 +2,7 @@
 //! findings, how it ended), as `summary.json` and as `navfuse run`'s summary line.
 
 use crate::plausibility::{self, Finding};
-use crate::time_offset::TimeOffsetFit;
+use crate::time_offset::{TimeOffsetFit, TimeOffsetSource};
 use navfuse_core::RunSummary;
 use std::path::PathBuf;
 use std::time::Duration;
@@ -120,12 +120,18 @@ impl JobResult {
                 "in_outages": s.gnss_in_outage,
                 "before_start": s.gnss_before_start,
             },
-            "time_offset": self.time_offset.map(|f| serde_json::json!({
+            "time_offset": self.time_offset.as_ref().map(|f| serde_json::json!({
                 "offset_s_at_start": f.tau0,
                 "offset_sigma_s_at_end": f.tau0_sd,
                 "rate_ppm": f.rate * 1e6,
                 "rate_sigma_ppm": f.rate_sd * 1e6,
                 "t_start": f.t0,
+                "source": f.source.name(),
+                "search_offset_s": f.search.map(|s| s.0),
+                "search_sigma_s": f.search.map(|s| s.1),
+                "pass_offset_s_at_start": f.filter.0,
+                "pass_rate_ppm": f.filter.1 * 1e6,
+                "note": f.note,
             })),
             "odometer_samples": self.odometer_samples,
             "heading_records": self.heading_records,
@@ -231,8 +237,17 @@ impl JobResult {
             line.push_str(&format!("; aiding {}", aiding.join(", ")));
         }
         if let Some(f) = &self.time_offset {
+            let how = match f.source {
+                TimeOffsetSource::Filter => "estimated in a first pass",
+                TimeOffsetSource::Search => {
+                    "from the turn-matching search (the estimation pass disagreed)"
+                }
+                TimeOffsetSource::Initial => {
+                    "the initial value kept (no significant estimate, events.log)"
+                }
+            };
             line.push_str(&format!(
-                "; GNSS-IMU time offset {:.4} s at t {:.1} (1-sigma {:.4}), rate {:.1} ppm (1-sigma {:.1}), estimated in a first pass; output times are GNSS time",
+                "; GNSS-IMU time offset {:.4} s at t {:.1} (1-sigma {:.4}), rate {:.1} ppm (1-sigma {:.1}), {how}; output times are GNSS time",
                 f.tau0, f.t0, f.tau0_sd, f.rate * 1e6, f.rate_sd * 1e6
             ));
         }

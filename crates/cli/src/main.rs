@@ -384,9 +384,11 @@ enum Command {
     /// With --smooth: the smoother on one simulated hour at 200 Hz (scenarios/
     /// hour_200hz.toml, built in, with a barometer and receiver fixes) with every
     /// vehicle state (odometer scale, mounting with the NHC, fix errors, barometer
-    /// bias, time offset and rate), output at the IMU rate: wall time and peak memory
-    /// of `navfuse run` without and with `--smooth`; PASS/FAIL against forward +
-    /// backward <= 2.5x forward alone and peak memory <= 300 MiB.
+    /// bias, time offset and rate; ZUPT/ZARU at the standstills), output at the IMU
+    /// rate: wall time and peak memory of `navfuse run` without and with `--smooth`;
+    /// PASS/FAIL against forward + backward <= 2.5x forward alone and peak memory <=
+    /// 300 MiB; also the time offset found (none is simulated) and the share of
+    /// odometer records refused.
     ///
     /// With --report: `navfuse report` on that hour (run with --smooth, not timed)
     /// against its 200 Hz truth: wall time and peak memory of reading, thinning,

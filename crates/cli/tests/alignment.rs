@@ -1,5 +1,5 @@
 //! Issue 30 part B: alignment on the data users bring, with the default `auto` mode
-//! and no attitude given (docs/RESULTS.md §16). Simulated cars idling with engine
+//! and no attitude given (docs/RESULTS.md §17). Simulated cars idling with engine
 //! vibration and started in motion, a UAV whose heading is not its course, a creeping
 //! car; the real drive, walk and PX4 logs (skipped with a message when ../shared is
 //! absent). The attitude at the first output is scored against the truth (or a
@@ -299,7 +299,7 @@ fn idling_car_aligns_static_over_seeds_sites_headings() {
 
 /// The same car started 60 s in, driving at 12 m/s: the old `auto` read a 10 s
 /// window, found motion, aligned on one pair of fixes and dropped the rest of the
-/// window: its first output came 10 s late and 62 m from the car (RESULTS.md §16).
+/// window: its first output came 10 s late and 62 m from the car (RESULTS.md §17).
 /// Now the output starts at the first GNSS epoch (at most one IMU interval after the
 /// start) with the GNSS state there.
 #[test]

@@ -227,7 +227,8 @@ fn demo_drive_excerpt() {
 }
 
 /// A stop asked for before the run: the run ends interrupted (in the demo's time-offset
-/// pass), before the first output epoch, and the sink still gets the report.
+/// search, the first read of the IMU), before the first output epoch, and the sink
+/// still gets the report.
 #[test]
 fn stop_flag_interrupts_the_library_run() {
     let cfg = config::load(&repo().join("examples/demo/drive_excerpt.toml")).unwrap();
@@ -243,7 +244,7 @@ fn stop_flag_interrupts_the_library_run() {
     assert_eq!((i.signal, i.t), (None, None));
     assert_eq!(
         e.to_string(),
-        "time-offset estimation pass: interrupted by request before the first output epoch; summary.json is marked \"interrupted\""
+        "time-offset search: interrupted by request before the first output epoch; summary.json is marked \"interrupted\""
     );
     assert!(sink.records.is_empty());
 }

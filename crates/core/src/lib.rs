@@ -30,6 +30,7 @@ pub mod smoother;
 pub mod state;
 pub(crate) mod static_detect;
 pub mod time;
+pub mod time_offset_search;
 pub mod types;
 
 pub use aiding::source::{AidingSource, Fuser, Handled};

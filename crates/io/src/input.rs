@@ -400,6 +400,10 @@ pub enum OdometerFormat {
     /// The simulator's odometer.txt, 4 columns `t cumulative_pulses
     /// pulses_in_interval speed`: read like `Pulses` from the cumulative count.
     Navfuse { meters_per_pulse: f64 },
+    /// The simulator's odometer.txt read from its speed column (the mean over the
+    /// interval since the previous record, with the simulated speed noise; the first
+    /// record only starts the intervals); the pulse columns are checked, not used.
+    NavfuseSpeed,
     /// A u-blox UBX log's ESF-MEAS wheel ticks or speed (docs/FORMATS.md "ESF-RAW
     /// and ESF-MEAS"); times are GPS times of the log.
     Ubx(UbxOdometer),

@@ -9,7 +9,10 @@
 //! - `speed`: `t speed_mps`;
 //! - `pulses`: `t cumulative_pulses` (speed = meters_per_pulse dN / dt);
 //! - `navfuse`: the simulator's odometer.txt, `t cumulative_pulses pulses_in_interval
-//!   speed`, read like `pulses` from the cumulative count.
+//!   speed`, read like `pulses` from the cumulative count;
+//! - `navfuse_speed`: the same file read from its speed column (the mean since the
+//!   previous record, with the simulated speed noise), like `speed` with
+//!   `speed_is_mean`.
 //!
 //! Times are on the IMU time scale, in the seconds-of-week convention of the IMU
 //! file; they must increase strictly. The whole file is validated; the first bad
@@ -53,14 +56,16 @@ fn read(
     let (ncols, what) = match src.format {
         OdometerFormat::Speed { .. } => (2, "t, speed [m/s]"),
         OdometerFormat::Pulses { .. } => (2, "t, cumulative pulses"),
-        OdometerFormat::Navfuse { .. } => (
+        OdometerFormat::Navfuse { .. } | OdometerFormat::NavfuseSpeed => (
             4,
             "t, cumulative pulses, pulses in the interval, speed [m/s]",
         ),
         OdometerFormat::Ubx(_) => (2, "not reached: read above"),
     };
     let meters_per_pulse = match src.format {
-        OdometerFormat::Speed { .. } | OdometerFormat::Ubx(_) => None,
+        OdometerFormat::Speed { .. } | OdometerFormat::NavfuseSpeed | OdometerFormat::Ubx(_) => {
+            None
+        }
         OdometerFormat::Pulses { meters_per_pulse }
         | OdometerFormat::Navfuse { meters_per_pulse } => {
             let k =
@@ -105,9 +110,18 @@ fn read(
                     ));
                 }
             }
-            match src.format {
-                OdometerFormat::Speed { speed_is_mean } => {
-                    let speed = num(1, "speed")?;
+            let speed_format = match src.format {
+                OdometerFormat::Speed { speed_is_mean } => Some((1, speed_is_mean)),
+                OdometerFormat::NavfuseSpeed => {
+                    num(1, "pulses")?;
+                    num(2, "pulses_in_interval")?;
+                    Some((3, true))
+                }
+                _ => None,
+            };
+            match (src.format, speed_format) {
+                (_, Some((column, speed_is_mean))) => {
+                    let speed = num(column, "speed")?;
                     match (speed_is_mean, prev) {
                         (false, _) => out.push(OdometerSample {
                             t,
@@ -124,8 +138,7 @@ fn read(
                     }
                     prev = Some((t, 0.0));
                 }
-                OdometerFormat::Ubx(_) => {}
-                OdometerFormat::Pulses { .. } | OdometerFormat::Navfuse { .. } => {
+                (OdometerFormat::Pulses { .. } | OdometerFormat::Navfuse { .. }, _) => {
                     let pulses = num(1, "pulses")?;
                     if let OdometerFormat::Navfuse { .. } = src.format {
                         let n = num(2, "pulses_in_interval")?;
@@ -174,6 +187,8 @@ fn read(
                     }
                     prev = Some((t, pulses));
                 }
+                // UBX is read above; the speed formats are the first arm.
+                _ => {}
             }
             Ok(())
         };

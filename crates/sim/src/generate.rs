@@ -298,6 +298,11 @@ pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError>
         None
     };
 
+    // The IMU clock: the IMU, odometer and barometer files are tagged this much later
+    // than GPS time (`[gnss] time_offset_s`, the GNSS-IMU time offset tau: a GNSS epoch
+    // tagged t was taken at IMU time t + tau); GNSS, heading and truth stay on GPS time.
+    let imu_clock_s = sc.file.gnss.as_ref().map_or(0.0, |g| g.time_offset_s);
+
     // Odometer.
     let odo = sc.file.odometer.clone();
     let mut odo_out = match &odo {
@@ -640,7 +645,7 @@ pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError>
             _ => imu_model.apply(imu_true.dt, &imu_true.dtheta, &imu_true.dvel),
         };
         line.clear();
-        push_fixed9(&mut line, imu_true.t);
+        push_fixed9(&mut line, imu_true.t + imu_clock_s);
         // Shortest round-trip decimal of each value: a fixed 9 decimals would round a
         // static 3.6e-7 rad increment by the same amount every sample, a gyro bias of
         // up to 20 deg/h at 200 Hz.
@@ -673,7 +678,7 @@ pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError>
         if let Some((sim, every, o, tr)) = baro.as_mut() {
             if k % *every == 0 {
                 let r = sim.sample(cur.t, cur.lla.z);
-                o.put(format!("{:.9} {:.4}\n", r.t_tag, r.pressure_pa).as_bytes())?;
+                o.put(format!("{:.9} {:.4}\n", r.t_tag + imu_clock_s, r.pressure_pa).as_bytes())?;
                 tr.put(format!("{:.9} {:.6}\n", cur.t, r.bias_m).as_bytes())?;
             }
         }
@@ -687,7 +692,7 @@ pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError>
                     + spec.speed_noise_mps * odo_rng.normal();
                 let s = format!(
                     "{:.9} {} {} {:.6}\n",
-                    cur.t,
+                    cur.t + imu_clock_s,
                     pulses,
                     pulses - odo_pulses_prev,
                     speed

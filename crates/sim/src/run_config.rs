@@ -45,7 +45,8 @@ pub fn run_config_text(sc: &Scenario, dir: &Path) -> String {
 /// coupling on gnss.txt when there are fixes, tight coupling on obs.rnx with raw
 /// observations only, pure inertial otherwise), initialised from the truth, with the
 /// IMU noise model of the simulated grade. With an odometer: odometer.txt with the
-/// nominal K_OD, the scenario's lever arm to the reference point and the mounting
+/// nominal K_OD (its speed column when the scenario adds speed noise), the scenario's
+/// lever arm to the reference point and the mounting
 /// estimated from zero (1 deg); with dual-antenna heading: heading.txt with the
 /// scenario's baseline. NHC and ZUPT stay off. Numbers the file gives in its own
 /// units (degrees, deg/h, mGal, ppm, hours) are chosen in those units and converted
@@ -144,7 +145,13 @@ pub fn run_config(sc: &Scenario, dir: &Path) -> RunConfig {
         )
     };
     let mut nav = NavConfig::new(imu_noise, initial);
-    nav.start_time = t0;
+    // The IMU clock runs `[gnss] time_offset_s` ahead of GPS time (generate.rs): the
+    // run starts at that IMU time and estimates the offset (from the default prior).
+    let tau = sc.file.gnss.as_ref().map_or(0.0, |g| g.time_offset_s);
+    nav.start_time = t0 + tau;
+    if tau != 0.0 {
+        nav.filter.time_offset = Some(Default::default());
+    }
     let mut gnss = None;
     let mut heading = None;
     if let Some(gs_) = &sc.file.gnss {
@@ -211,11 +218,24 @@ pub fn run_config(sc: &Scenario, dir: &Path) -> RunConfig {
     let mut odometer = None;
     if let Some(o) = &sc.file.odometer {
         nav.odometer.enabled = true;
+        // With speed noise the speed column carries it (the pulse count is exact):
+        // read that column, with its noise and the pulse quantisation of a differenced
+        // count, K_OD rate / sqrt(6), in the std (the default when that is larger).
+        let format = if o.speed_noise_mps > 0.0 {
+            let quantisation = o.meters_per_pulse * o.rate_hz / 6f64.sqrt();
+            nav.odometer.std_mps = nav
+                .odometer
+                .std_mps
+                .max(o.speed_noise_mps.hypot(quantisation));
+            OdometerFormat::NavfuseSpeed
+        } else {
+            OdometerFormat::Navfuse {
+                meters_per_pulse: o.meters_per_pulse,
+            }
+        };
         odometer = Some(OdometerSource {
             path: dir.join("odometer.txt"),
-            format: OdometerFormat::Navfuse {
-                meters_per_pulse: o.meters_per_pulse,
-            },
+            format,
             skip_lines: None,
         });
         nav.vehicle = VehicleOptions {

@@ -3,7 +3,8 @@
 //!   v_ant = v^n + C_b^n (w_ib^b x l^b) - w_in^n x (C_b^n l^b)
 //!   y = v_ant,INS - v_GNSS ~ dv + (\[C (w x l)\] x - \[w_in x\]\[C l x\]) phi
 //!                            - C \[l x\] (b_g + diag(w) s_g)
-//!                            + a^n dtau   (time-offset state, if present)
+//!                            + a^n dtau   (time-offset state, if present; a^n only
+//!                                          while moving and accelerating)
 //!   R = diag(vel_std²)
 
 use super::{AidingContext, Linearized};
@@ -39,9 +40,30 @@ pub fn antenna_velocity_jacobian(ctx: &AidingContext) -> (Vector3<f64>, DMatrix<
         .copy_from(&(c_lx * Matrix3::from_diagonal(&ctx.w_ib_b)));
     if let Some(i) = ctx.layout.index(Block::TimeOffset) {
         // A fix applied dtau too late sees the velocity of dtau later: + a^n dtau.
-        h.view_mut((0, i), (3, 1)).copy_from(&ctx.a_n);
+        h.view_mut((0, i), (3, 1))
+            .copy_from(&time_offset_acceleration(ctx));
     }
     (antenna_velocity(ctx), h)
+}
+
+/// Below this INS speed \[m/s\] or acceleration \[m/s²\] the velocity-level
+/// measurements' time-offset column is left out.
+const TIME_OFFSET_MIN_SPEED_MPS: f64 = 1.0;
+const TIME_OFFSET_MIN_ACCEL_MPS2: f64 = 0.3;
+
+/// The acceleration in the time-offset column of a velocity-level measurement: the
+/// INS's a^n while the vehicle moves and accelerates, else zero. At rest or cruising
+/// a^n is the INS's own acceleration error (an accelerometer bias not yet estimated:
+/// 0.05 m/s² for 5 mg) and the IMU's white noise: with it in H, carrier-phase rates
+/// read the velocity drift as a time offset (140 ms in the first 5 s at rest, and
+/// offsets run away by seconds in tight coupling; issue 30 part E).
+pub fn time_offset_acceleration(ctx: &AidingContext) -> Vector3<f64> {
+    let a = ctx.a_n;
+    if ctx.nav.v_n.norm() >= TIME_OFFSET_MIN_SPEED_MPS && a.norm() >= TIME_OFFSET_MIN_ACCEL_MPS2 {
+        a
+    } else {
+        Vector3::zeros()
+    }
 }
 
 pub fn linearize(ctx: &AidingContext, fix: &GnssFix) -> Option<Linearized> {

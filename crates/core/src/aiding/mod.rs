@@ -99,13 +99,13 @@ pub enum Aiding<'a> {
     Heading(&'a HeadingObs, HeadingAxis),
     /// Non-holonomic constraint with lateral/vertical std \[m/s\].
     Nhc([f64; 2]),
-    /// Odometer speed \[m/s\], its std \[m/s\], optional NHC rows (seed 004's 3-row form);
-    /// `calibrate` = false leaves the scale and mounting states out (near standstill).
+    /// Measured odometer speed \[m/s\], its error model (odometer.rs: the std and the
+    /// calibration threshold apply to the speed predicted from the state), optional
+    /// NHC rows (seed 004's 3-row form).
     Odometer {
         speed_mps: f64,
-        std_mps: f64,
+        noise: odometer::OdometerNoise,
         nhc_std: Option<[f64; 2]>,
-        calibrate: bool,
     },
     /// Zero velocity, std \[m/s\].
     Zupt(f64),
@@ -174,12 +174,9 @@ impl Aiding<'_> {
             Aiding::Nhc(std) => Some(nhc::linearize(ctx, *std)),
             Aiding::Odometer {
                 speed_mps,
-                std_mps,
+                noise,
                 nhc_std,
-                calibrate,
-            } => Some(odometer::linearize(
-                ctx, *speed_mps, *std_mps, *nhc_std, *calibrate,
-            )),
+            } => Some(odometer::linearize(ctx, *speed_mps, noise, *nhc_std)),
             Aiding::Zupt(std) => Some(zupt::linearize_zupt(ctx, *std)),
             Aiding::Zaru(w, std) => Some(zupt::linearize_zaru(ctx, w, *std)),
             Aiding::Pseudorange(sat) => pseudorange::linearize(ctx, sat),
@@ -366,9 +363,8 @@ pub(crate) mod tests {
             Aiding::Nhc([0.1, 0.1]),
             Aiding::Odometer {
                 speed_mps: 9.0,
-                std_mps: 0.05,
+                noise: ODOMETER_NOISE,
                 nhc_std: Some([0.1, 0.1]),
-                calibrate: true,
             },
             Aiding::Zupt(0.01),
         ] {
@@ -378,6 +374,78 @@ pub(crate) mod tests {
         // Ranges of 2e7 m: a larger step keeps the rounding below the tolerance.
         for a in [Aiding::Pseudorange(&sat), Aiding::Doppler(&sat)] {
             check_linearized(&f, 1e-4, |_| a);
+        }
+    }
+
+    const ODOMETER_NOISE: odometer::OdometerNoise = odometer::OdometerNoise {
+        std_mps: 0.05,
+        std_speed_fraction: 0.01,
+        calibration_min_speed_mps: 1.0,
+    };
+
+    /// The odometer model s_od = v^m_x / (1 + k) over random states (speed, heading,
+    /// attitude, mounting, lever arm, scale up to +-20 %), with and without the NHC
+    /// rows: H matches finite differences, and neither H nor R depends on the measured
+    /// speed (the noise of the record must not enter them; y moves by exactly the
+    /// change of the measurement). Below the calibration speed the scale and mounting
+    /// columns are zero.
+    #[test]
+    fn odometer_jacobian_over_random_states_without_the_measurement_in_h() {
+        use crate::attitude::c_bn_from_euler;
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(30);
+        let scale = context_fixture(true)
+            .layout
+            .index(Block::OdometerScale)
+            .unwrap();
+        let mount = context_fixture(true).layout.index(Block::Mounting).unwrap();
+        for trial in 0..200 {
+            let mut f = context_fixture(true);
+            let mut u = |a: f64, b: f64| rng.random_range(a..b);
+            let speed = if trial % 10 == 0 {
+                u(0.0, 0.9)
+            } else {
+                u(1.5, 40.0)
+            };
+            let course = u(-3.1, 3.1);
+            f.nav.q_bn = q_bn_from_euler(&Vector3::new(u(-0.1, 0.1), u(-0.1, 0.1), course));
+            f.nav.v_n = Vector3::new(speed * course.cos(), speed * course.sin(), u(-0.3, 0.3));
+            f.w_ib_b = Vector3::new(u(-0.1, 0.1), u(-0.1, 0.1), u(-0.5, 0.5));
+            f.vehicle.c_bm = c_bn_from_euler(&Vector3::new(
+                u(-0.05, 0.05),
+                u(-0.05, 0.05),
+                u(-0.05, 0.05),
+            ));
+            // Within 1 m: the vehicle_frame Jacobian leaves out the Earth rate's share
+            // of the lever-arm term (|l| x 7.3e-5 against a tolerance of 1e-4).
+            f.vehicle.lever_arm_b = Vector3::new(u(-0.6, 0.6), u(-0.6, 0.6), u(-0.6, 0.6));
+            f.vehicle.odometer_scale = u(-0.2, 0.2);
+            let measured = speed + u(-0.5, 0.5);
+            for nhc_std in [None, Some([0.1, 0.1])] {
+                let a = |s: f64| Aiding::Odometer {
+                    speed_mps: s,
+                    noise: ODOMETER_NOISE,
+                    nhc_std,
+                };
+                let c0 = ctx(&f, &f.nav, f.w_ib_b, (f.vehicle, FIXTURE_CLOCK));
+                let l1 = a(measured).linearize(&c0).unwrap();
+                let l2 = a(measured + 0.37).linearize(&c0).unwrap();
+                assert_eq!(l1.h, l2.h, "trial {trial}: H depends on the measured speed");
+                assert_eq!(l1.r, l2.r, "trial {trial}: R depends on the measured speed");
+                assert!((l1.y[0] - l2.y[0] - 0.37).abs() < 1e-12);
+                let s_pred = odometer::predicted_speed(&c0);
+                let calibrating = l1.h[(0, scale)] != 0.0;
+                assert_eq!(calibrating, s_pred.abs() >= 1.0 && f.nav.v_n.norm() >= 1.0);
+                if calibrating {
+                    check_linearized(&f, 1e-6, |_| a(measured));
+                } else {
+                    let rows = if nhc_std.is_some() { 3 } else { 1 };
+                    assert!(
+                        (0..rows).all(|i| l1.h[(i, mount)] == 0.0 && l1.h[(i, mount + 1)] == 0.0)
+                    );
+                }
+                assert!((l1.r[(0, 0)] - 0.05f64.hypot(0.01 * s_pred).powi(2)).abs() < 1e-15);
+            }
         }
     }
 

@@ -10,6 +10,9 @@
 //! - Measurements at equal times are applied in the order of the merged list
 //!   (`merge_measurements`: GNSS, then odometer, then heading); the second one at a
 //!   time integrates nothing.
+//! - The GNSS-clock inputs come due at their time tag plus the GNSS-IMU time offset,
+//!   the IMU-clock ones (odometer, barometer) at their own: each clock's inputs in
+//!   their order, the two interleaved by effective time ([`Inbox`]).
 //! - A measurement whose time is already behind the navigator (possible when the
 //!   GNSS-IMU time offset estimate moves) is applied at once.
 
@@ -203,11 +206,26 @@ pub enum Due<'a> {
     Withheld(&'a Measurement),
 }
 
+/// The two clocks the inputs are tagged on: index 0 the GNSS receiver's (shifted by the
+/// GNSS-IMU time offset), 1 the IMU's (odometer, barometer).
+fn clock(m: &Measurement) -> usize {
+    if m.on_gnss_clock() {
+        0
+    } else {
+        1
+    }
+}
+
 /// The merged, time-sorted measurements, handed over as the IMU time line reaches them.
+/// The inputs of each clock keep their order; the two clocks are interleaved by
+/// effective time (ties: the merged order), so that a GNSS-IMU time offset delays or
+/// advances the GNSS inputs only: an odometer record tagged between a fix's time tag
+/// and its effective time neither waits for the fix nor holds it back.
 #[derive(Debug)]
 pub struct Inbox<'a> {
     meas: &'a [Measurement],
-    next: usize,
+    /// Index of the next input on each clock ([`clock`]; `meas.len()` when none).
+    next: [usize; 2],
     outages: &'a OutageSchedule,
 }
 
@@ -221,35 +239,70 @@ pub fn effective_time(m: &Measurement, time_offset_s: f64) -> f64 {
         }
 }
 
+/// First index at or after `from` of an input on clock `c` (`meas.len()` when none).
+fn seek_up(meas: &[Measurement], from: usize, c: usize) -> usize {
+    meas[from.min(meas.len())..]
+        .iter()
+        .position(|m| clock(m) == c)
+        .map_or(meas.len(), |k| from + k)
+}
+
+/// One past the last index below `below` of an input on clock `c` (0 when none).
+fn seek_down(meas: &[Measurement], below: usize, c: usize) -> usize {
+    meas[..below]
+        .iter()
+        .rposition(|m| clock(m) == c)
+        .map_or(0, |k| k + 1)
+}
+
 impl<'a> Inbox<'a> {
     pub fn new(meas: &'a [Measurement], outages: &'a OutageSchedule) -> Self {
         Inbox {
             meas,
-            next: 0,
+            next: [seek_up(meas, 0, 0), seek_up(meas, 0, 1)],
             outages,
         }
     }
 
-    /// Drop the leading measurements for which `unused` holds; returns them.
+    /// The clock whose next input comes first at `time_offset_s`, with its index and
+    /// effective time.
+    fn first(&self, time_offset_s: f64) -> Option<(usize, usize, f64)> {
+        let cand = |c: usize| {
+            let i = self.next[c];
+            self.meas
+                .get(i)
+                .map(|m| (c, i, effective_time(m, time_offset_s)))
+        };
+        match (cand(0), cand(1)) {
+            (Some(a), Some(b)) => Some(if (b.2, b.1) < (a.2, a.1) { b } else { a }),
+            (a, b) => a.or(b),
+        }
+    }
+
+    /// Drop, on each clock, the leading measurements for which `unused` holds (at the
+    /// current offset `unused` is monotone along each clock); returns them.
     pub fn skip_while(
         &mut self,
         mut unused: impl FnMut(&Measurement) -> bool,
-    ) -> &'a [Measurement] {
-        let first = self.next;
-        while self.next < self.meas.len() && unused(&self.meas[self.next]) {
-            self.next += 1;
+    ) -> Vec<&'a Measurement> {
+        let mut skipped = Vec::new();
+        for c in 0..2 {
+            while let Some(m) = self.meas.get(self.next[c]).filter(|m| unused(m)) {
+                skipped.push(m);
+                self.next[c] = seek_up(self.meas, self.next[c] + 1, c);
+            }
         }
-        &self.meas[first..self.next]
+        skipped
     }
 
     /// The next measurement whose effective time is at or before `t_end`.
     pub fn next_due(&mut self, t_end: f64, time_offset_s: f64) -> Option<Due<'a>> {
-        let m = self.meas.get(self.next)?;
-        let t_eff = effective_time(m, time_offset_s);
+        let (c, i, t_eff) = self.first(time_offset_s)?;
         if t_eff > t_end {
             return None;
         }
-        self.next += 1;
+        let m = &self.meas[i];
+        self.next[c] = seek_up(self.meas, i + 1, c);
         if m.on_gnss_clock() && self.outages.contains(m.t()) {
             return Some(Due::Withheld(m));
         }
@@ -258,48 +311,67 @@ impl<'a> Inbox<'a> {
 }
 
 /// The time-sorted measurements handed over from the last to the first as a
-/// backward run reaches them: the mirror of [`Inbox`]. They come in the reverse of
-/// the merged order (at equal times too); a GNSS-clock time is shifted by the offset
-/// as forward (one that the offset puts above an input listed after it waits for
-/// that one, as forward the other way round); GNSS outages withhold the same inputs.
+/// backward run reaches them: the mirror of [`Inbox`]. Each clock's inputs come in
+/// the reverse of their merged order, the two clocks interleaved by effective time
+/// (ties: the reverse of the merged order); GNSS outages withhold the same inputs.
 #[derive(Debug)]
 pub struct ReverseInbox<'a> {
     meas: &'a [Measurement],
-    /// One past the next measurement to hand over (counting down).
-    next: usize,
+    /// One past the next input to hand over on each clock (counting down; 0: none).
+    next: [usize; 2],
     outages: &'a OutageSchedule,
 }
 
 impl<'a> ReverseInbox<'a> {
     pub fn new(meas: &'a [Measurement], outages: &'a OutageSchedule) -> Self {
+        let n = meas.len();
         ReverseInbox {
             meas,
-            next: meas.len(),
+            next: [seek_down(meas, n, 0), seek_down(meas, n, 1)],
             outages,
         }
     }
 
-    /// Drop the trailing measurements for which `unused` holds; returns them.
+    fn last(&self, time_offset_s: f64) -> Option<(usize, usize, f64)> {
+        let cand = |c: usize| {
+            let i = self.next[c].checked_sub(1)?;
+            Some((c, i, effective_time(&self.meas[i], time_offset_s)))
+        };
+        match (cand(0), cand(1)) {
+            (Some(a), Some(b)) => Some(if (b.2, b.1) > (a.2, a.1) { b } else { a }),
+            (a, b) => a.or(b),
+        }
+    }
+
+    /// Drop, on each clock, the trailing measurements for which `unused` holds;
+    /// returns them.
     pub fn skip_while(
         &mut self,
         mut unused: impl FnMut(&Measurement) -> bool,
-    ) -> &'a [Measurement] {
-        let last = self.next;
-        while self.next > 0 && unused(&self.meas[self.next - 1]) {
-            self.next -= 1;
+    ) -> Vec<&'a Measurement> {
+        let mut skipped = Vec::new();
+        for c in 0..2 {
+            while let Some(m) = self.next[c]
+                .checked_sub(1)
+                .map(|i| &self.meas[i])
+                .filter(|m| unused(m))
+            {
+                skipped.push(m);
+                self.next[c] = seek_down(self.meas, self.next[c] - 1, c);
+            }
         }
-        &self.meas[self.next..last]
+        skipped
     }
 
     /// The next (latest remaining) measurement whose effective time is at or after
     /// `t_low`, the lower end of the interval being integrated.
     pub fn next_due(&mut self, t_low: f64, time_offset_s: f64) -> Option<Due<'a>> {
-        let m = self.meas.get(self.next.checked_sub(1)?)?;
-        let t_eff = effective_time(m, time_offset_s);
+        let (c, i, t_eff) = self.last(time_offset_s)?;
         if t_eff < t_low {
             return None;
         }
-        self.next -= 1;
+        let m = &self.meas[i];
+        self.next[c] = seek_down(self.meas, i, c);
         if m.on_gnss_clock() && self.outages.contains(m.t()) {
             return Some(Due::Withheld(m));
         }
@@ -402,14 +474,15 @@ mod tests {
     }
 
     /// The inbox on its own: GNSS-clock inputs come due at t + offset, the odometer
-    /// (IMU clock) at its own time; a fix inside an outage is withheld, an odometer
-    /// record at the same time is not; nothing is handed over twice.
+    /// (IMU clock) at its own time, neither waiting for the other; a fix inside an
+    /// outage is withheld, an odometer record at the same time is not; nothing is
+    /// handed over twice.
     #[test]
     fn inbox_applies_the_offset_and_withholds_outages() {
         use crate::outage::Window;
         let meas = crate::types::merge_measurements(
             &[fix(1.0), fix(2.0), fix(3.0)],
-            &[odo(1.0), odo(2.0)],
+            &[odo(1.0), odo(1.1), odo(2.0)],
             &[],
         );
         let outages = OutageSchedule {
@@ -421,7 +494,6 @@ mod tests {
         };
         let mut inbox = Inbox::new(&meas, &outages);
         let offset = 0.2;
-        // Up to IMU time 1.1: the odometer at 1.0 and the fix at 1.0 + 0.2 is not due.
         let due_at = |t_end: f64, inbox: &mut Inbox| {
             let mut got = Vec::new();
             while let Some(d) = inbox.next_due(t_end, offset) {
@@ -432,23 +504,120 @@ mod tests {
             }
             got
         };
-        // Merged order at t = 1: the fix first; it is due at 1.2, so nothing before.
-        assert!(due_at(1.1, &mut inbox).is_empty());
+        // Up to IMU time 1.1: the odometer at 1.0 and 1.1; the fix tagged 1.0 is due at
+        // 1.2 and does not hold them back.
         assert_eq!(
-            due_at(1.2, &mut inbox),
-            vec![(true, 1.2, true), (false, 1.0, true)]
+            due_at(1.1, &mut inbox),
+            vec![(false, 1.0, true), (false, 1.1, true)]
         );
-        // The fix at 2.0 is inside the outage: withheld; the odometer at 2.0 is not.
+        assert_eq!(due_at(1.2, &mut inbox), vec![(true, 1.2, true)]);
+        // The odometer at 2.0 comes before the fix tagged 2.0 (due at 2.2), which is
+        // inside the outage: withheld.
         assert_eq!(
             due_at(2.2, &mut inbox),
-            vec![(true, 2.0, false), (false, 2.0, true)]
+            vec![(false, 2.0, true), (true, 2.0, false)]
         );
         assert_eq!(due_at(10.0, &mut inbox), vec![(true, 3.2, true)]);
         assert!(due_at(10.0, &mut inbox).is_empty());
-        // skip_while drops the leading inputs only.
+        // A negative offset: the fix tagged 2.0 is due at 1.8, before the odometer
+        // records at 1.9 it is listed after.
+        let meas2 =
+            crate::types::merge_measurements(&[fix(2.0)], &[odo(1.7), odo(1.9), odo(2.1)], &[]);
+        let none = OutageSchedule::default();
+        let mut inbox = Inbox::new(&meas2, &none);
+        let mut order = Vec::new();
+        while let Some(Due::Apply { m, t_eff }) = inbox.next_due(10.0, -0.2) {
+            order.push((m.on_gnss_clock(), t_eff));
+        }
+        assert_eq!(
+            order,
+            vec![(false, 1.7), (true, 1.8), (false, 1.9), (false, 2.1)]
+        );
+        // skip_while drops the leading inputs of each clock.
         let mut inbox = Inbox::new(&meas, &outages);
         assert_eq!(inbox.skip_while(|m| m.t() <= 1.0).len(), 2);
-        assert!(matches!(inbox.next_due(10.0, 0.0), Some(Due::Withheld(_))));
+        assert!(matches!(
+            inbox.next_due(10.0, 0.0),
+            Some(Due::Apply { t_eff, .. }) if t_eff == 1.1
+        ));
+    }
+
+    /// Random inputs on both clocks, random offsets: every input is handed over once;
+    /// each clock's in its own order; the effective times never go back (the time line
+    /// is followed); with a zero offset the order is exactly the merged list's.
+    #[test]
+    fn inbox_interleaves_the_clocks_by_effective_time() {
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(30);
+        let none = OutageSchedule::default();
+        for trial in 0..500 {
+            let times = |n: usize, step: f64, rng: &mut rand_pcg::Pcg64| {
+                let mut t = 0.0;
+                (0..n)
+                    .map(|_| {
+                        // repeated times too
+                        if rng.random::<f64>() > 0.1 {
+                            t += rng.random::<f64>() * step;
+                        }
+                        t
+                    })
+                    .collect::<Vec<f64>>()
+            };
+            let g: Vec<_> = times(rng.random_range(0..20), 1.0, &mut rng)
+                .into_iter()
+                .map(fix)
+                .collect();
+            let o: Vec<_> = times(rng.random_range(0..60), 0.3, &mut rng)
+                .into_iter()
+                .map(odo)
+                .collect();
+            let meas = crate::types::merge_measurements(&g, &o, &[]);
+            let offset = if trial % 5 == 0 {
+                0.0
+            } else {
+                rng.random_range(-1.5..1.5)
+            };
+            let mut fwd = Vec::new();
+            let mut inbox = Inbox::new(&meas, &none);
+            let mut t_end = -2.0;
+            while t_end < 30.0 {
+                t_end += rng.random::<f64>() * 0.7;
+                while let Some(Due::Apply { m, t_eff }) = inbox.next_due(t_end, offset) {
+                    assert!(t_eff <= t_end);
+                    fwd.push((m as *const Measurement, t_eff));
+                }
+            }
+            assert_eq!(fwd.len(), meas.len(), "trial {trial}");
+            assert!(fwd.windows(2).all(|w| w[0].1 <= w[1].1), "trial {trial}");
+            let idx = |p: *const Measurement| meas.iter().position(|m| std::ptr::eq(m, p)).unwrap();
+            for c in 0..2 {
+                let mine: Vec<usize> = fwd
+                    .iter()
+                    .map(|x| idx(x.0))
+                    .filter(|&i| clock(&meas[i]) == c)
+                    .collect();
+                assert!(mine.windows(2).all(|w| w[0] < w[1]));
+            }
+            if offset == 0.0 {
+                let order: Vec<usize> = fwd.iter().map(|x| idx(x.0)).collect();
+                assert_eq!(order, (0..meas.len()).collect::<Vec<_>>());
+            }
+            // Backward: the exact reverse of the forward order.
+            let mut bwd = Vec::new();
+            let mut inbox = ReverseInbox::new(&meas, &none);
+            let mut t_low = 32.0;
+            while t_low > -4.0 {
+                t_low -= rng.random::<f64>() * 0.7;
+                while let Some(Due::Apply { m, t_eff }) = inbox.next_due(t_low, offset) {
+                    bwd.push((m as *const Measurement, t_eff));
+                }
+            }
+            bwd.reverse();
+            assert_eq!(
+                bwd.iter().map(|x| idx(x.0)).collect::<Vec<_>>(),
+                fwd.iter().map(|x| idx(x.0)).collect::<Vec<_>>(),
+                "trial {trial}"
+            );
+        }
     }
 
     /// The backward mirror: cuts at random times going down; the pieces (time-reversed:
@@ -535,19 +704,14 @@ mod tests {
         };
         assert!(due_down_to(3.3, &mut inbox).is_empty());
         assert_eq!(due_down_to(3.2, &mut inbox), vec![(true, 3.2, true)]);
-        // At 2: the odometer (last in the merged order) first, then the withheld fix.
+        // The fix tagged 2.0 (due at 2.2, withheld) before the odometer at 2.0.
         assert_eq!(
             due_down_to(1.9, &mut inbox),
-            vec![(false, 2.0, true), (true, 2.0, false)]
+            vec![(true, 2.0, false), (false, 2.0, true)]
         );
-        // The fix tagged 1.0 (due at 1.2) waits behind the odometer at 1.0, as forward
-        // the odometer waits behind it (the merged order, mirrored): both come when the
-        // odometer is due, the fix then behind the navigator (applied at once).
-        assert!(due_down_to(1.1, &mut inbox).is_empty());
-        assert_eq!(
-            due_down_to(0.0, &mut inbox),
-            vec![(false, 1.0, true), (true, 1.2, true)]
-        );
+        // The fix tagged 1.0 is due at 1.2, before (going down) the odometer at 1.0.
+        assert_eq!(due_down_to(1.1, &mut inbox), vec![(true, 1.2, true)]);
+        assert_eq!(due_down_to(0.0, &mut inbox), vec![(false, 1.0, true)]);
         assert!(due_down_to(-10.0, &mut inbox).is_empty());
     }
 }

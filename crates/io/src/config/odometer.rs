@@ -23,6 +23,8 @@ pub(super) enum TOdoFormat {
     Pulses,
     #[serde(rename = "navfuse")]
     Navfuse,
+    #[serde(rename = "navfuse_speed")]
+    NavfuseSpeed,
     #[serde(rename = "ubx")]
     Ubx,
 }
@@ -107,15 +109,25 @@ pub(super) fn convert(o: &TOdometer, base: &Path) -> KResult<(OdometerSource, Od
                 }),
             }
         }
-        TOdoFormat::Speed => {
+        TOdoFormat::Speed | TOdoFormat::NavfuseSpeed => {
             if o.meters_per_pulse.is_some() {
                 return Err(kerr(
                     "odometer.meters_per_pulse",
                     "applies only to odometer.format = \"pulses\", \"navfuse\" or \"ubx\"",
                 ));
             }
-            OdometerFormat::Speed {
-                speed_is_mean: o.speed_is_mean.unwrap_or(true),
+            if o.format == TOdoFormat::NavfuseSpeed {
+                if o.speed_is_mean.is_some() {
+                    return Err(kerr(
+                        "odometer.speed_is_mean",
+                        "applies only to odometer.format = \"speed\" (the simulator's speed column is the mean over the interval)",
+                    ));
+                }
+                OdometerFormat::NavfuseSpeed
+            } else {
+                OdometerFormat::Speed {
+                    speed_is_mean: o.speed_is_mean.unwrap_or(true),
+                }
             }
         }
         TOdoFormat::Pulses | TOdoFormat::Navfuse => {
@@ -199,6 +211,7 @@ pub(super) fn to_toml(
     let mut ubx_measurement = None;
     let (format, meters_per_pulse, speed_is_mean) = match src.format {
         OdometerFormat::Speed { speed_is_mean } => (TOdoFormat::Speed, None, Some(speed_is_mean)),
+        OdometerFormat::NavfuseSpeed => (TOdoFormat::NavfuseSpeed, None, None),
         OdometerFormat::Ubx(UbxOdometer::Speed) => {
             ubx_measurement = Some(TUbxOdo::Speed);
             (TOdoFormat::Ubx, None, None)

@@ -37,6 +37,12 @@ pub struct GnssSpec {
     /// Write obs.rnx / nav.rnx (raw measurements).
     #[serde(default = "yes")]
     pub raw: bool,
+    /// GNSS-IMU time offset tau \[s\] (the convention of navfuse's `[filter]
+    /// time_offset`): a GNSS epoch tagged t was taken at IMU time t + tau. The IMU,
+    /// odometer and barometer files are tagged tau later than GPS time; GNSS, heading,
+    /// DGPS and the truth stay on GPS time.
+    #[serde(default)]
+    pub time_offset_s: f64,
     #[serde(default)]
     pub errors: ErrorBudget,
     /// Receiver fixes for loose coupling (gnss.txt); absent = none.
@@ -504,6 +510,15 @@ impl GnssSpec {
             if !(v.is_finite() && v > 0.0) {
                 return bad(k, format!("expected a correlation time > 0 s, got {v}"));
             }
+        }
+        if !(self.time_offset_s.is_finite() && self.time_offset_s.abs() <= 100.0) {
+            return bad(
+                "time_offset_s",
+                format!(
+                    "expected a time offset within +-100 s, got {}",
+                    self.time_offset_s
+                ),
+            );
         }
         if let Some(f) = &self.fix {
             if !(f.horizontal_std_m > 0.0
