@@ -257,6 +257,30 @@ impl SolutionSink for FileSink {
         Ok(())
     }
 
+    fn tuning(
+        &mut self,
+        tuned: &crate::tune::Tuned,
+        files: &mut Vec<PathBuf>,
+    ) -> Result<(), Error> {
+        let header = "# Written by [tuning]: the input configuration with the noise model estimated from the data (tuning.txt).\n";
+        let json = serde_json::to_string_pretty(&tuned.result.to_json())
+            .map_err(|e| Error::Other(format!("tuning.json: {e}")))?;
+        for (name, text) in [
+            (
+                "tuned.toml",
+                header.to_string() + &tuned.config.to_toml_string(),
+            ),
+            ("tuning.json", json + "\n"),
+            ("tuning.txt", tuned.text.clone()),
+        ] {
+            let p = self.dir.join(name);
+            std::fs::write(&p, text)
+                .map_err(|e| Error::io(format!("cannot write {}", p.display()), e))?;
+            files.push(p);
+        }
+        Ok(())
+    }
+
     fn begin(&mut self, layout: &OutputLayout, files: &mut Vec<PathBuf>) -> Result<(), Error> {
         self.main = Threaded::start(record_writers(&self.dir, "solution", layout, files)?);
         Ok(())

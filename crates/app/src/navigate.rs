@@ -147,6 +147,17 @@ pub(crate) fn navigate(
     job: &mut JobResult,
 ) -> Result<(), Error> {
     let warn = opts.warn;
+    // [tuning]: the noise model from the data first; the run is the tuned one's.
+    let cfg = if cfg.tuning.enabled {
+        let tuned = crate::tune::tune_config(&cfg, opts).map_err(|e| match e {
+            Error::Interrupted(_) => e,
+            e => Error::Other(format!("[tuning]: {e}")),
+        })?;
+        sink.tuning(&tuned, &mut job.files)?;
+        tuned.config
+    } else {
+        cfg
+    };
     if cfg.smoother.enabled
         && matches!(
             cfg.nav.gnss.fusion,

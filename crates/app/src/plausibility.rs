@@ -320,16 +320,21 @@ pub fn innovation_consistency(s: &SourceInnovations) -> Vec<Finding> {
         let significant = mean > (3.0 / (pairs as f64).sqrt()).max(MAX_INNOVATION_AUTOCORRELATION);
         if significant {
             let dt = st.mean_pair_dt().unwrap_or(f64::NAN);
-            let what = if s.correlated_model {
+            let what = if s.source == "gnss_velocity" {
+                "the fix velocities' errors are correlated in time (a receiver's own velocity filter) where the model has them white (the fix-error model covers positions only)"
+            } else if s.correlated_model {
                 "the fix errors are correlated longer than the fix-error model allows ([gnss] error_corr_time_s, error_corr_fraction)"
             } else {
                 "the errors are correlated in time where the model has them white"
             };
             let fix = match s.source {
-                "gnss_position" | "gnss_velocity" if !s.correlated_model => {
+                "gnss_velocity" => {
+                    "set [gnss] use_velocity = false, or raise [gnss] velocity_std_scale so that they weigh less"
+                }
+                "gnss_position" if !s.correlated_model => {
                     "model them as Gauss-Markov ([gnss] error_corr_time_s)"
                 }
-                "gnss_position" | "gnss_velocity" => "lengthen [gnss] error_corr_time_s",
+                "gnss_position" => "lengthen [gnss] error_corr_time_s",
                 _ => "raise {key} so that the correlated errors weigh less",
             };
             out.push(Finding::warning(format!(

@@ -81,6 +81,17 @@ pub trait SolutionSink {
         Ok(())
     }
 
+    /// With `[tuning]`: the noise model estimated before the run (the run then uses
+    /// `tuned.config`); push the paths of the files it is written to onto `files`.
+    fn tuning(
+        &mut self,
+        tuned: &crate::tune::Tuned,
+        files: &mut Vec<PathBuf>,
+    ) -> Result<(), Error> {
+        let _ = (tuned, files);
+        Ok(())
+    }
+
     /// Get ready for records laid out as `layout`; push the paths of the files this
     /// sink will write onto `files` (they appear in the summary).
     fn begin(&mut self, layout: &OutputLayout, files: &mut Vec<PathBuf>) -> Result<(), Error>;

@@ -103,18 +103,23 @@ pub(crate) fn estimate(
     if to.std_s.is_nan() || to.std_s <= 0.0 {
         return Ok(None);
     }
-    let searched = search(cfg, measurements, &to, opts)?;
-    let prior = match &searched {
-        Some(s) => TimeOffsetConfig {
-            initial_s: s.line.at(s.t_first),
-            std_s: (2.0 * s.found.sigma_s)
-                .max(0.02)
-                .hypot(to.rate_std * 0.5 * s.span_s),
-            ..to
-        },
-        None => to,
+    // The search from `start`, then the estimation pass from its value.
+    let search_and_pass = |start: TimeOffsetConfig| -> Result<_, Error> {
+        let searched = search(cfg, measurements, &start, opts)?;
+        let prior = match &searched {
+            Some(s) => TimeOffsetConfig {
+                initial_s: s.line.at(s.t_first),
+                std_s: (2.0 * s.found.sigma_s)
+                    .max(0.02)
+                    .hypot(start.rate_std * 0.5 * s.span_s),
+                ..start
+            },
+            None => start,
+        };
+        Ok((searched, pass(cfg, measurements, prior, opts)?))
     };
-    let Some(pass1) = pass(cfg, measurements, prior, opts)? else {
+    let (searched, pass1) = search_and_pass(to)?;
+    let Some(pass1) = pass1 else {
         return Ok(None);
     };
     // An implausible fit of the pass: would the offset of GPS time against UTC fit?
@@ -125,7 +130,7 @@ pub(crate) fn estimate(
                 initial_s: cand,
                 ..to
             };
-            if let Some(g) = pass(cfg, measurements, start, opts)? {
+            if let (_, Some(g)) = search_and_pass(start)? {
                 let found = plausibility::leap_second_fit(pass1.tau0, g.tau0, g.rate);
                 if !found.is_empty() {
                     check(job, opts.warn, found)?;

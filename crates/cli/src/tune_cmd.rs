@@ -3,7 +3,7 @@
 //! report, then the tuned configuration's run.
 
 use anyhow::{Context, Result};
-use navfuse_app::tune::{copy_noise_model, tune, TuneOptions};
+use navfuse_app::tune::{tune_config, TuneOptions};
 use navfuse_app::{config, FileSink, RunOptions, StopFlag};
 use std::path::PathBuf;
 
@@ -47,27 +47,29 @@ pub fn main(a: &TuneArgs) -> Result<()> {
             a.options.max_iterations
         );
     }
-    let r = tune(cfg.clone(), &a.options, &opts)?;
-    // The input with the estimates in it (its inputs, time offset and outages as given).
-    let mut tuned = cfg;
-    copy_noise_model(&r.tuned.nav, &mut tuned.nav);
-    tuned.defaulted.retain(|k| !k.starts_with("imu_noise."));
+    let mut cfg = cfg;
+    cfg.tuning = navfuse_app::config::TuningSpec {
+        enabled: true,
+        iterations: a.options.max_iterations,
+        from_data: a.options.from_data,
+        fix_error_model: a.options.fix_error_model,
+    };
+    let t = tune_config(&cfg, &opts)?;
     let toml_path = a.out.join("tuned.toml");
     let header = format!(
         "# Written by `navfuse tune {}`: the noise model estimated from the data (tuning.txt).\n",
         a.config.display()
     );
-    std::fs::write(&toml_path, header + &tuned.to_toml_string())
+    std::fs::write(&toml_path, header + &t.config.to_toml_string())
         .with_context(|| format!("cannot write {}", toml_path.display()))?;
-    let table = r.table();
-    let diff = config_diff(&cfg_text(&a.config)?, &tuned.to_toml_string());
-    std::fs::write(a.out.join("tuning.txt"), format!("{table}\n{diff}"))
+    std::fs::write(a.out.join("tuning.txt"), &t.text)
         .with_context(|| format!("cannot write {}", a.out.join("tuning.txt").display()))?;
     std::fs::write(
         a.out.join("tuning.json"),
-        serde_json::to_string_pretty(&r.to_json())? + "\n",
+        serde_json::to_string_pretty(&t.result.to_json())? + "\n",
     )
     .with_context(|| format!("cannot write {}", a.out.join("tuning.json").display()))?;
+    let table = t.result.table();
     println!("{table}");
     if !a.quiet {
         eprintln!(
@@ -84,7 +86,7 @@ pub fn main(a: &TuneArgs) -> Result<()> {
             stop: Some(stop),
             ..Default::default()
         };
-        let job = navfuse_app::run(tuned, &mut FileSink::create(&a.out)?, &opts)?;
+        let job = navfuse_app::run(t.config, &mut FileSink::create(&a.out)?, &opts)?;
         if !a.quiet {
             eprintln!("{}", job.summary_line());
         }
@@ -93,43 +95,4 @@ pub fn main(a: &TuneArgs) -> Result<()> {
         }
     }
     Ok(())
-}
-
-/// The configuration as the tuned one is written (every key), for the difference.
-fn cfg_text(path: &std::path::Path) -> Result<String> {
-    let is_yaml = path.extension().is_some_and(|e| e == "yaml" || e == "yml");
-    let c = if is_yaml {
-        config::load_kfgins_yaml(path)
-    } else {
-        config::load(path)
-    }?;
-    Ok(c.to_toml_string())
-}
-
-/// The lines of `after` that differ from `before` (both written by `to_toml_string`,
-/// so in the same order), as `- old` / `+ new` under their section.
-fn config_diff(before: &str, after: &str) -> String {
-    let mut out =
-        String::from("Difference from the input configuration (every key written out):\n");
-    let mut section = "";
-    let b: Vec<&str> = before.lines().collect();
-    let a: Vec<&str> = after.lines().collect();
-    let mut any = false;
-    for (i, line) in a.iter().enumerate() {
-        if line.starts_with('[') {
-            section = line;
-        }
-        let old = b.get(i).copied().unwrap_or("");
-        if old != *line {
-            if !any || !out.ends_with(&format!("{section}\n")) {
-                out.push_str(&format!("{section}\n"));
-            }
-            out.push_str(&format!("- {old}\n+ {line}\n"));
-            any = true;
-        }
-    }
-    if !any {
-        out.push_str("(none)\n");
-    }
-    out
 }

@@ -300,12 +300,20 @@ fn smoothed_records_equal_the_cli_files() {
         let s = summary(&cli);
         assert_eq!(s["smoother"]["epochs"], rep.epochs);
         assert_eq!(s["smoother"]["separation_flagged"], rep.separation_flagged);
-        // The demo's filter is overconfident (RESULTS §11): the separation says so.
+        // The separation warning follows the flagged share (over 20 %): with the noise
+        // model `navfuse tune` found for the demo, forward and backward agree (RESULTS
+        // §19; with the earlier hand-set model, overconfident, they did not).
         let warned = s["warnings"].as_array().unwrap().iter().any(|w| {
             w.as_str().unwrap().starts_with("smoothing:")
                 && w.as_str().unwrap().contains("separation.csv")
         });
-        assert!(warned, "{mode}: no separation warning in {}", s["warnings"]);
+        let share = rep.separation_flagged as f64 / rep.separation_rows.max(1) as f64;
+        assert_eq!(
+            warned,
+            share > 0.2,
+            "{mode}: {share} flagged, warnings {}",
+            s["warnings"]
+        );
         // The smoothed solution differs from the forward one (it did something).
         let moved = sink
             .smoothed

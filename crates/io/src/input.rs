@@ -387,6 +387,31 @@ impl Default for SmootherSpec {
     }
 }
 
+/// Noise identification before the run (`[tuning]`, docs/CONFIG.md): the
+/// configuration's noise model replaced by the one estimated from the run's own data
+/// (`navfuse tune`), then the run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TuningSpec {
+    pub enabled: bool,
+    /// Most expectation-maximisation passes.
+    pub iterations: usize,
+    /// Start the IMU white noise from the data even where the configuration gives it.
+    pub from_data: bool,
+    /// Choose between white and time-correlated GNSS fix errors by likelihood.
+    pub fix_error_model: bool,
+}
+
+impl Default for TuningSpec {
+    fn default() -> Self {
+        TuningSpec {
+            enabled: false,
+            iterations: 8,
+            from_data: false,
+            fix_error_model: true,
+        }
+    }
+}
+
 /// What an odometer file holds (docs/FORMATS.md "Odometer").
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum OdometerFormat {

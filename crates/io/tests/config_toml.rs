@@ -596,10 +596,17 @@ fn wrong_type_and_length() {
         "{e}"
     );
 
-    // missing required key
+    // a noise key left out takes its documented default and is listed as defaulted
+    // (docs/CONFIG.md "[imu_noise]"; `navfuse tune` estimates it)
     let text = MINIMAL.replace("corr_time_h = 1\n", "");
-    let e = err("missing.toml", &text);
-    assert_eq!(e.key.as_deref(), Some("imu_noise.corr_time_h"), "{e}");
+    let c = load_toml(&tmp("missing.toml", &text)).unwrap();
+    assert_eq!(c.defaulted, vec!["imu_noise.corr_time_h"]);
+    assert_eq!(c.nav.imu_noise.corr_time_s, 3600.0);
+
+    // missing required key
+    let text = MINIMAL.replace("file = \"IMU.txt\"\n", "");
+    let e = err("missing_file.toml", &text);
+    assert_eq!(e.key.as_deref(), Some("imu.file"), "{e}");
 
     // missing section
     let text = MINIMAL.replace("[imu_noise]", "[imu_noise_]");

@@ -118,6 +118,7 @@ pub fn draw(run: &RunData, truth: Option<&Truth>) -> Result<Report, Error> {
     extra_states(&mut c, run.states.as_ref(), "states", "States")?;
     integrity(&mut c, &outages)?;
     smoother(&mut c, truth)?;
+    tuning(&mut c)?;
     let title = format!("navfuse report: {}", run.dir.display());
     Ok(Report {
         title,
@@ -1094,6 +1095,138 @@ fn smoother(c: &mut Ctx, truth: Option<&Truth>) -> Result<(), Error> {
                 &chart,
             )?;
         }
+    }
+    Ok(())
+}
+
+/// tuning.json (`[tuning]` or `navfuse tune`): the estimates with their uncertainty,
+/// the likelihood and NIS per row per pass, the fix-error model's candidates.
+fn tuning(c: &mut Ctx) -> Result<(), Error> {
+    let Some(t) = c.run.tuning.as_ref() else {
+        return Ok(());
+    };
+    let num = |v: &serde_json::Value| v.as_f64();
+    let fmt = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{x:.4}"));
+    let rows: Vec<Vec<String>> = t["estimates"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .map(|e| {
+            vec![
+                plain(&e["key"]),
+                plain(&e["unit"]),
+                fmt(num(&e["given"])),
+                fmt(num(&e["value"])),
+                num(&e["rel_se"]).map_or("-".into(), |x| format!("{:.0} %", 100.0 * x)),
+                plain(&e["samples"]),
+            ]
+        })
+        .collect();
+    let runs = t["forward_runs"].as_u64().unwrap_or(0);
+    let wall = num(&t["wall_s"]).unwrap_or(f64::NAN);
+    c.tables.push(Table {
+        section: "Tuning",
+        caption: format!(
+            "Noise model estimated from the data by expectation-maximisation over the RTS smoother ({runs} forward runs, {wall:.2} s{}); +-: relative standard error by batch means",
+            if t["converged"].as_bool() == Some(true) { ", converged" } else { ", not converged: the best pass kept" }
+        ),
+        header: ["parameter", "unit", "given", "estimate", "+-", "samples"]
+            .map(String::from)
+            .to_vec(),
+        rows,
+    });
+    let passes = t["iterations"].as_array().cloned().unwrap_or_default();
+    let mut sources: Vec<String> = passes
+        .iter()
+        .flat_map(|p| {
+            p["nis_per_row"]
+                .as_object()
+                .into_iter()
+                .flatten()
+                .map(|(k, _)| k.clone())
+        })
+        .collect();
+    sources.sort();
+    sources.dedup();
+    let mut header = vec!["pass".to_string(), "log-likelihood".to_string()];
+    header.extend(sources.iter().map(|s| format!("NIS/row {s}")));
+    let row_of = |name: String, p: &serde_json::Value| {
+        let mut r = vec![name, fmt(num(&p["log_likelihood"]))];
+        r.extend(sources.iter().map(|s| fmt(num(&p["nis_per_row"][s]))));
+        r
+    };
+    let mut rows: Vec<Vec<String>> = passes
+        .iter()
+        .enumerate()
+        .map(|(i, p)| row_of((i + 1).to_string(), p))
+        .collect();
+    rows.push(row_of("tuned".into(), &t["tuned"]));
+    c.tables.push(Table {
+        section: "Tuning",
+        caption: "Innovation log-likelihood and NIS per row (1 for a consistent filter) per pass"
+            .into(),
+        header,
+        rows,
+    });
+    if let Some(f) = t["fix_error"].as_object() {
+        let rows = f["candidates"]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .map(|k| {
+                let tau = num(&k["corr_time_s"]).unwrap_or(0.0);
+                vec![
+                    if tau > 0.0 {
+                        format!("Gauss-Markov {tau:.0} s")
+                    } else {
+                        "white".into()
+                    },
+                    fmt(num(&k["corr_fraction"])),
+                    fmt(num(&k["position_std_scale"])),
+                    fmt(num(&k["log_likelihood"])),
+                ]
+            })
+            .collect();
+        c.tables.push(Table {
+            section: "Tuning",
+            caption: format!(
+                "GNSS fix-error model: the candidates' likelihoods; chosen: {}",
+                match num(&f["corr_time_s"]) {
+                    Some(x) if x > 0.0 => format!(
+                        "Gauss-Markov {x:.0} s, {:.0} % of the variance",
+                        100.0 * num(&f["corr_fraction"]).unwrap_or(0.0)
+                    ),
+                    _ => "white".into(),
+                }
+            ),
+            header: [
+                "model",
+                "correlated fraction",
+                "position std scale",
+                "log-likelihood",
+            ]
+            .map(String::from)
+            .to_vec(),
+            rows,
+        });
+    }
+    let pts: Vec<(f64, f64)> = passes
+        .iter()
+        .enumerate()
+        .filter_map(|(i, p)| Some(((i + 1) as f64, num(&p["log_likelihood"])?)))
+        .collect();
+    if pts.len() >= 2 {
+        let mut chart = Chart::new("Tuning: likelihood per pass", "pass", "log-likelihood");
+        chart
+            .series
+            .push(Series::line("log-likelihood", palette(0), pts.clone()));
+        chart.series.push(Series::points("pass", palette(0), pts));
+        c.push(
+            "tuning_likelihood",
+            "Tuning",
+            "Innovation log-likelihood of the forward run per expectation-maximisation pass (rises until the noise model fits the data)".into(),
+            &chart,
+        )?;
     }
     Ok(())
 }

@@ -4,7 +4,7 @@
 use crate::Report;
 
 /// The sections in page order.
-pub const SECTIONS: [&str; 8] = [
+pub const SECTIONS: [&str; 9] = [
     "Summary",
     "Trajectory",
     "Errors",
@@ -13,6 +13,7 @@ pub const SECTIONS: [&str; 8] = [
     "States",
     "Integrity",
     "Smoother",
+    "Tuning",
 ];
 
 /// Escape text for HTML.

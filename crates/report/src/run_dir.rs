@@ -170,6 +170,8 @@ pub struct RunData {
     /// The solution state was derived from innovations.csv (no `state` column).
     pub state_derived: bool,
     pub summary: Option<serde_json::Value>,
+    /// tuning.json of a run with `[tuning]` (or `navfuse tune`'s output directory).
+    pub tuning: Option<serde_json::Value>,
     pub config: Option<String>,
     pub events: Vec<String>,
 }
@@ -750,6 +752,15 @@ pub fn read_run(dir: &Path, score_t: &[f64]) -> Result<RunData, Error> {
         })?),
         Err(_) => None,
     };
+    let tuning = match std::fs::read_to_string(dir.join("tuning.json")) {
+        Ok(s) => Some(serde_json::from_str(&s).map_err(|e| {
+            Error::new(format!(
+                "{}: not JSON: {e}",
+                dir.join("tuning.json").display()
+            ))
+        })?),
+        Err(_) => None,
+    };
     let events = std::fs::read_to_string(dir.join("events.log"))
         .map(|s| s.lines().map(str::to_string).collect())
         .unwrap_or_default();
@@ -768,6 +779,7 @@ pub fn read_run(dir: &Path, score_t: &[f64]) -> Result<RunData, Error> {
         innovations,
         state_derived,
         summary,
+        tuning,
         config: std::fs::read_to_string(dir.join("config.toml")).ok(),
         events,
     })

@@ -285,6 +285,7 @@ pub fn run_config(sc: &Scenario, dir: &Path) -> RunConfig {
         kfgins_output_path: None,
         warnings: Vec::new(),
         smoother: Default::default(),
+        tuning: Default::default(),
         relative_outages: Vec::new(),
         defaulted: Vec::new(),
     }

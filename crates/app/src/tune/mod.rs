@@ -8,7 +8,7 @@
 //! estimate (params.rs, smoother/em.rs). The innovation likelihood of each forward run
 //! (\[SCHWEPPE65\]) is tracked; the configuration of highest likelihood is the answer.
 //! EM moves slowly when a parameter is far off, so a parameter that keeps moving the
-//! same way takes doubled steps (up to 8x its EM step), which the likelihood check
+//! same way takes doubled steps (up to 4x its EM step), which the likelihood check
 //! keeps honest. Without `[imu_noise]` the IMU model starts from the data's own white
 //! noise (init.rs). Whether the GNSS fixes' errors are white or time-correlated, and
 //! with which time constant, is decided by the likelihood among white and three
@@ -594,6 +594,72 @@ pub fn copy_noise_model(from: &NavConfig, to: &mut NavConfig) {
     to.tight.pseudorange_sigma_scale = from.tight.pseudorange_sigma_scale;
     to.tight.range_rate_sigma_scale = from.tight.range_rate_sigma_scale;
     to.baro.std_m = from.baro.std_m;
+}
+
+/// A tuned configuration as `navfuse tune` and `[tuning]` write it.
+#[derive(Clone, Debug)]
+pub struct Tuned {
+    /// The input with the estimated noise model (`[tuning]` off: a run of it repeats
+    /// the tuned run).
+    pub config: RunConfig,
+    pub result: TuneResult,
+    /// `tuning.txt`: the estimates' table and the difference from the input.
+    pub text: String,
+}
+
+/// [`tune`] with the options of `cfg.tuning`, the estimates copied into `cfg`
+/// ([`copy_noise_model`]) and the report text.
+pub fn tune_config(cfg: &RunConfig, run_opts: &RunOptions) -> Result<Tuned, Error> {
+    let spec = &cfg.tuning;
+    let opts = TuneOptions {
+        max_iterations: spec.iterations,
+        from_data: spec.from_data,
+        fix_error_model: spec.fix_error_model,
+        ..TuneOptions::default()
+    };
+    let result = tune(cfg.clone(), &opts, run_opts)?;
+    let mut tuned = cfg.clone();
+    copy_noise_model(&result.tuned.nav, &mut tuned.nav);
+    tuned.defaulted.retain(|k| !k.starts_with("imu_noise."));
+    tuned.tuning.enabled = false;
+    let mut before = cfg.clone();
+    before.tuning.enabled = false;
+    let diff = config_diff(&before.to_toml_string(), &tuned.to_toml_string());
+    let text = format!("{}\n{diff}", result.table());
+    Ok(Tuned {
+        config: tuned,
+        result,
+        text,
+    })
+}
+
+/// The lines of `after` that differ from `before` (both written by
+/// `RunConfig::to_toml_string`, so in the same order), as `- old` / `+ new` under
+/// their section.
+pub fn config_diff(before: &str, after: &str) -> String {
+    let mut out =
+        String::from("Difference from the input configuration (every key written out):\n");
+    let (mut section, mut printed) = ("", "\0");
+    let b: Vec<&str> = before.lines().collect();
+    let mut any = false;
+    for (i, line) in after.lines().enumerate() {
+        if line.starts_with('[') {
+            section = line;
+        }
+        let old = b.get(i).copied().unwrap_or("");
+        if old != line {
+            if printed != section {
+                out.push_str(&format!("{section}\n"));
+                printed = section;
+            }
+            out.push_str(&format!("- {old}\n+ {line}\n"));
+            any = true;
+        }
+    }
+    if !any {
+        out.push_str("(none)\n");
+    }
+    out
 }
 
 /// Shortest decimal of `v` with 4 significant digits.

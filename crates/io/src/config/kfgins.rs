@@ -210,6 +210,7 @@ pub(super) fn kfgins_to_raw(y: KfYaml, w: &mut Vec<String>) -> KResult<(TomlRoot
         heading: None,
         baro: None,
         smoother: None,
+        tuning: None,
         time: TTime {
             start: Some(y.starttime),
             // KF-GINS: a negative endtime means the end of the IMU file

@@ -41,6 +41,7 @@ mod spoofing;
 mod tight;
 mod time;
 mod time_offset;
+mod tuning;
 mod ubx;
 pub mod units;
 mod validate;
@@ -54,6 +55,7 @@ use std::path::{Path, PathBuf};
 use navfuse_core::config::NavConfig;
 use navfuse_core::outage::Periodic;
 
+pub use crate::input::TuningSpec;
 pub use error::ConfigError;
 pub use rinex::{DEFAULT_DGPS_MAX_AGE_S, DEFAULT_ELEVATION_MASK_DEG};
 pub use write::TomlStyle;
@@ -118,6 +120,8 @@ pub struct RunConfig {
     pub output: OutputSpec,
     /// Post-processing after the forward run (`[smoother]`).
     pub smoother: crate::input::SmootherSpec,
+    /// Noise identification before the run (`[tuning]`).
+    pub tuning: crate::input::TuningSpec,
     /// The config file this came from.
     pub source_path: PathBuf,
     /// KF-GINS `outputpath` (resolved against the YAML's directory); the CLI's `--out`

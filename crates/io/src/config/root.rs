@@ -23,11 +23,12 @@ use super::paths::PathWriter;
 use super::smoother::{self, TSmoother};
 use super::spoofing::{self, TSpoofing};
 use super::time::{self, TTime};
+use super::tuning::{self, TTuning};
 use super::vehicle::{self, TVehicle};
 use super::zupt::{self, TZupt};
 use super::{RelativeOutage, RunConfig};
 use crate::input::{
-    GnssSource, HeadingSource, ImuSource, OdometerSource, OutputSpec, SmootherSpec,
+    GnssSource, HeadingSource, ImuSource, OdometerSource, OutputSpec, SmootherSpec, TuningSpec,
 };
 
 /// navfuse TOML, as written (user units).
@@ -63,6 +64,8 @@ pub(super) struct TomlRoot {
     pub(super) output: TOutput,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) smoother: Option<TSmoother>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) tuning: Option<TTuning>,
 }
 
 /// A [`RunConfig`] but for where it came from.
@@ -76,6 +79,7 @@ pub(super) struct Converted {
     baro: Option<crate::baro::BaroSource>,
     output: OutputSpec,
     smoother: SmootherSpec,
+    tuning: TuningSpec,
     relative_outages: Vec<RelativeOutage>,
     defaulted: Vec<&'static str>,
 }
@@ -96,6 +100,7 @@ impl Converted {
             baro: self.baro,
             output: self.output,
             smoother: self.smoother,
+            tuning: self.tuning,
             source_path: path.to_path_buf(),
             kfgins_output_path: kf_out,
             warnings,
@@ -133,6 +138,10 @@ pub(super) fn convert(raw: TomlRoot, base: &Path) -> KResult<Converted> {
     let smoother = match &raw.smoother {
         Some(t) => smoother::convert(t)?,
         None => SmootherSpec::default(),
+    };
+    let tuning = match &raw.tuning {
+        Some(t) => tuning::convert(t)?,
+        None => TuningSpec::default(),
     };
     let d = NavConfig::new(imu_noise, initial);
     let vehicle = raw.vehicle.as_ref().map(vehicle::convert).transpose()?;
@@ -190,6 +199,7 @@ pub(super) fn convert(raw: TomlRoot, base: &Path) -> KResult<Converted> {
         baro: baro_src,
         output,
         smoother,
+        tuning,
         relative_outages,
         defaulted,
     })
@@ -217,6 +227,7 @@ pub(super) fn to_raw(c: &RunConfig, w: &PathWriter) -> TomlRoot {
         filter: filter::to_toml(&n.filter),
         output: output::to_toml(&c.output),
         smoother: smoother::to_toml(&c.smoother),
+        tuning: tuning::to_toml(&c.tuning),
     }
 }
 
