@@ -302,7 +302,7 @@ fn smoothed_records_equal_the_cli_files() {
         assert_eq!(s["smoother"]["separation_flagged"], rep.separation_flagged);
         // The separation warning follows the flagged share (over 20 %): with the noise
         // model `navfuse tune` found for the demo, forward and backward agree (RESULTS
-        // §19; with the earlier hand-set model, overconfident, they did not).
+        // §22; with the earlier hand-set model, overconfident, they did not).
         let warned = s["warnings"].as_array().unwrap().iter().any(|w| {
             w.as_str().unwrap().starts_with("smoothing:")
                 && w.as_str().unwrap().contains("separation.csv")

@@ -32,7 +32,7 @@ fn a_30_s_imu_gap_is_bridged() {
     // The gap logic on the IMU noise the demo had when this test was written (ARW
     // 1 deg/sqrt(h)); with the larger horizontal ARW `navfuse tune` finds for the demo
     // (6.2) the recovery after the gap refuses fixes for 4 s and reaches 11 m (3.5 m
-    // RMS): noted in RESULTS.md §19, not fixed here.
+    // RMS): noted in RESULTS.md §22, not fixed here.
     cfg.nav.imu_noise.arw = Vector3::repeat(1.0f64.to_radians() / 60.0);
     std::fs::write(dir.join("gap.toml"), cfg.to_toml_string()).unwrap();
     let out = dir.join("out");

@@ -3,7 +3,7 @@
 //! files it writes, the likelihood it climbs, the consistency it reaches, the tuned
 //! configuration repeating the run, and the report's section. The accuracy against
 //! hand-tuned runs over simulated cars, the stand-in and the real drive is `navfuse
-//! bench --tune` (RESULTS.md §19).
+//! bench --tune` (RESULTS.md §22).
 
 mod common;
 use common::{navfuse_ok, repo, tmp};

@@ -344,10 +344,14 @@ fn verdicts(c: &CaseResult, real_drive: bool) -> Vec<(String, bool)> {
     }
     let (lo, hi) = c.nees_band;
     if !real_drive {
-        for (what, x) in [("pos", c.tuned.nees_pos), ("vel", c.tuned.nees_vel)] {
+        for (what, x, h) in [
+            ("pos", c.tuned.nees_pos, c.hand.nees_pos),
+            ("vel", c.tuned.nees_vel, c.hand.nees_vel),
+        ] {
             if let Some(x) = x {
+                let hand = h.map_or(String::new(), |h| format!(", hand {h:.2}"));
                 v.push((
-                    format!("NEES {what} {x:.2} ({lo:.2}-{hi:.2})"),
+                    format!("NEES {what} {x:.2} ({lo:.2}-{hi:.2}{hand})"),
                     (lo..=hi).contains(&x),
                 ));
             }

