@@ -252,20 +252,23 @@ enum Command {
         quiet: bool,
     },
     /// Reproduce a paper's experiment on the simulator (SYSTEM.md §7): seed000 (tight
-    /// coupling, DGPS), seed001 (heading from GNSS), seed002 (NHC with GNSS outages),
+    /// coupling, DGPS), seed001 (heading from GNSS), seed001_outages (seed 001's drive
+    /// with seed 002's 30 s and 60 s GNSS outages), seed002 (NHC with GNSS outages),
     /// seed004 (INS + odometer, no GNSS; with --attack, spoofing detection).
     ///
     /// Simulates the experiment's scenario for each seed, runs every navigator variant
     /// on the same data, scores it against the truth and prints mean [min, max] over the
     /// seeds beside the paper's figures (tables at most 100 columns wide, a legend of
     /// the columns under them), with the improvement (base - variant) / base (the
-    /// formula of seed 002 eq. 18; the footer says what it means for each experiment).
+    /// formula of seed 002 eq. 18; the footer says what it means for each experiment),
+    /// its 95 % bootstrap interval over the seeds and the range of the seeds' own
+    /// improvements.
     ///
     /// seed004 only: --attack, --jump-runs and --clean-hours replace the plain
     /// experiment by the spoofing ones (any combination; each is printed in turn, or
     /// together under --json). Their runs use two threads.
     Reproduce {
-        /// Experiment: seed000, seed001, seed002 or seed004.
+        /// Experiment: seed000, seed001, seed001_outages, seed002 or seed004.
         experiment: String,
         /// Number of random seeds.
         #[arg(long, default_value_t = 4)]

@@ -105,32 +105,59 @@ fn seed004_ins_odometer_loop() {
     }
 }
 
+/// Improvement of the mean over seeds, (base - variant) / base (seed 002 eq. 18).
+fn improvement(r: &Value, metric: &str, base: &str, variant: &str) -> f64 {
+    let b = mean(&per_seed(r, base, metric));
+    let v = mean(&per_seed(r, variant, metric));
+    (b - v) / b
+}
+
 /// Seed 002: NHC with 30 s and 60 s GNSS outages lowers the 3D position RMSE by at
-/// least the paper's 38 % (mean over seeds); the attitude figure is reported, not
-/// asserted at the paper's 62 % (measured 58 %, docs/RESULTS.md §6).
+/// least the paper's 38 % (mean over seeds), with GNSS velocity and with GNSS position
+/// only (the paper's setting); the attitude figure is reported, not asserted at the
+/// paper's 62 % (30 seeds: 43.8 % and 48.6 %; 60.1 % with the IMU mounting known,
+/// docs/RESULTS.md §19). The known mounting must help the attitude: it is our
+/// explanation of the gap.
 #[test]
 fn seed002_nhc_improves_position_and_attitude() {
     let r = reproduce("seed002", "2");
-    let p0 = mean(&per_seed(&r, "loose", "rmse_3d_m"));
-    let p1 = mean(&per_seed(&r, "nhc", "rmse_3d_m"));
-    let a0 = mean(&per_seed(&r, "loose", "rmse_att3d_deg"));
-    let a1 = mean(&per_seed(&r, "nhc", "rmse_att3d_deg"));
-    eprintln!("seed002 3D {p0:.3} -> {p1:.3} m, attitude {a0:.3} -> {a1:.3} deg");
+    for (base, nhc) in [("loose", "nhc"), ("loose_pos", "nhc_pos")] {
+        let p = improvement(&r, "rmse_3d_m", base, nhc);
+        let a = improvement(&r, "rmse_att3d_deg", base, nhc);
+        eprintln!("seed002 {base} -> {nhc}: 3D {p:.3}, attitude {a:.3}");
+        assert!(p >= 0.38, "{nhc}: position improvement {p}");
+        assert!(a >= 0.4, "{nhc}: attitude improvement {a}");
+    }
+    let a_est = improvement(&r, "rmse_att3d_deg", "loose_pos", "nhc_pos");
+    let a_known = improvement(&r, "rmse_att3d_deg", "loose_pos", "nhc_mounted");
+    eprintln!("seed002 attitude, mounting estimated {a_est:.3}, known {a_known:.3}");
     assert!(
-        (p0 - p1) / p0 >= 0.38,
-        "position improvement {}",
-        (p0 - p1) / p0
-    );
-    assert!(
-        (a0 - a1) / a0 >= 0.4,
-        "attitude improvement {}",
-        (a0 - a1) / a0
+        a_known > a_est,
+        "the known mounting did not help: {a_known} <= {a_est}"
     );
 }
 
+/// Seed 001's drive with seed 002's outages (`seed001_outages`): the dual-antenna
+/// heading lowers the yaw RMSE by more than 80 % and moves the 3D position RMSE by
+/// less than 10 % (30 seeds: 86.4 % and 3.1 %), while the NHC lowers the 3D RMSE by
+/// more than 30 % (30 seeds: 54.9 %). A heading measurement does not hold the position
+/// through an outage; a constraint on the velocity does (docs/RESULTS.md §19).
+#[test]
+fn seed001_outages_heading_fixes_yaw_not_position() {
+    let r = reproduce("seed001_outages", "2");
+    let yaw = improvement(&r, "rmse_yaw_deg", "loose", "dual_antenna");
+    let pos = improvement(&r, "rmse_3d_m", "loose", "dual_antenna");
+    let nhc = improvement(&r, "rmse_3d_m", "loose", "nhc");
+    eprintln!("seed001_outages dual antenna: yaw {yaw:.3}, 3D {pos:.3}; NHC 3D {nhc:.3}");
+    assert!(yaw > 0.8, "dual-antenna yaw improvement {yaw}");
+    assert!(pos.abs() < 0.1, "dual-antenna 3D improvement {pos}");
+    assert!(nhc > 0.3, "NHC 3D improvement {nhc}");
+}
+
 /// Seed 001: heading from GNSS lowers the yaw RMSE of the position-only loose filter:
-/// the dual antenna by more than 80 % (measured 88 %; the paper reports 83 %), the
-/// course over ground by more than 50 % (measured 56 % on these 2 seeds, 65 % on 4).
+/// the dual antenna by more than 80 % (measured 86 % on these 2 seeds, 88 % on 4; the
+/// paper reports 83 %), the course of the fix velocity by more than 50 % (measured 65 %
+/// on these 2 seeds, 68 % on 4).
 /// Before the time-line fix
 /// (issue 15) the heading records at GNSS epochs integrated IMU increments twice in
 /// every variant (dual antenna 70 %) (docs/RESULTS.md §9).

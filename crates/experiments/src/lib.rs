@@ -34,7 +34,7 @@ pub use anyhow::{Error, Result};
 /// What `navfuse reproduce` was asked for.
 #[derive(Clone, Debug)]
 pub struct ReproduceArgs {
-    /// seed000, seed001, seed002 or seed004.
+    /// seed000, seed001, seed001_outages, seed002 or seed004.
     pub experiment: String,
     /// Number of random seeds.
     pub seeds: u64,

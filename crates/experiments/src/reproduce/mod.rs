@@ -22,6 +22,7 @@ use navfuse_core::eval::{evaluate, EvalOptions, TrajPoint};
 use navfuse_io::config::RunConfig;
 use navfuse_io::input::{GnssFormat, GnssSource};
 use navfuse_sim::generate::generate;
+use navfuse_sim::gnss_sim::EventSpec;
 use navfuse_sim::scenario::Scenario;
 
 use crate::navigate::navigate;
@@ -53,6 +54,8 @@ pub(crate) struct Experiment {
     pub(crate) title: &'static str,
     pub(crate) scenario_name: &'static str,
     pub(crate) scenario_text: &'static str,
+    /// Another scenario (name, text) whose GNSS outages are added to this one's.
+    pub(crate) outages_from: Option<(&'static str, &'static str)>,
     pub(crate) variants: Vec<Variant>,
     pub(crate) paper: Vec<PaperFigure>,
     /// Improvement checks: (metric, base variant, variant, claimed fraction).
@@ -79,6 +82,31 @@ pub(crate) fn gnss_only_track(cfg: &RunConfig) -> Result<Vec<TrajPoint>> {
     Ok(navfuse_io::trajectory::points_of_fixes(&g.fixes))
 }
 
+/// The experiment's scenario text, with the `[[gnss.event]]` outages of
+/// `outages_from` appended (so the copy the simulator writes has them).
+pub(crate) fn scenario_text(ex: &Experiment) -> Result<String> {
+    let mut text = ex.scenario_text.to_string();
+    let Some((name, other)) = ex.outages_from else {
+        return Ok(text);
+    };
+    let src = Scenario::from_text(Path::new(name), other.to_string())?;
+    let events = src.file.gnss.as_ref().map_or(&[][..], |g| &g.events[..]);
+    text.push_str(&format!("\n# GNSS outages of {name}\n"));
+    let mut n = 0;
+    for ev in events {
+        if let EventSpec::Outage { start_s, end_s } = ev {
+            text.push_str(&format!(
+                "\n[[gnss.event]]\ntype = \"outage\"\nstart_s = {start_s:?}\nend_s = {end_s:?}\n"
+            ));
+            n += 1;
+        }
+    }
+    if n == 0 {
+        bail!("{}: {name} has no GNSS outage to add", ex.id);
+    }
+    Ok(text)
+}
+
 /// Per variant, per seed: the metrics.
 pub(crate) struct Results {
     pub(crate) seeds: Vec<u64>,
@@ -93,9 +121,9 @@ pub(crate) fn run_experiment(
 ) -> Result<Results> {
     let mut per_variant: Vec<(&'static str, Vec<Metrics>)> =
         ex.variants.iter().map(|v| (v.name, Vec::new())).collect();
+    let text = scenario_text(ex)?;
     for &seed in seeds {
-        let mut sc =
-            Scenario::from_text(Path::new(ex.scenario_name), ex.scenario_text.to_string())?;
+        let mut sc = Scenario::from_text(Path::new(ex.scenario_name), text.clone())?;
         sc.file.seed = seed;
         let dir = work.path().join(format!("{}_seed{seed}", ex.id));
         let sim = generate(&sc, &dir)?;

@@ -5,8 +5,9 @@
 use std::path::Path;
 
 use nalgebra::Vector3;
-use navfuse_core::config::AttitudeInit;
+use navfuse_core::config::{AttitudeInit, NhcMode};
 use navfuse_io::config::RunConfig;
+use navfuse_io::gnss_csv::CsvGnssOptions;
 use navfuse_io::input::{Coupling, DgpsKind, DgpsSource, GnssFormat, GnssSource, RinexGnss};
 use navfuse_sim::imu_model::ImuGrade;
 use navfuse_sim::scenario::Scenario;
@@ -88,6 +89,28 @@ pub(crate) fn user_start(cfg: &mut RunConfig, sc: &Scenario) {
 pub(crate) fn seed001_start(cfg: &mut RunConfig, sc: &Scenario) {
     user_start(cfg, sc);
     cfg.nav.gnss.use_velocity = false;
+}
+
+/// Seed 001's receiver output as its eq. 11 reads it: the fixes' position and std
+/// only (the simulator's gnss.txt read as CSV without its velocity columns), so the
+/// course over ground comes from the displacement between consecutive fixes and the
+/// alignment sees positions only.
+pub(crate) fn fixes_without_velocity(cfg: &mut RunConfig) {
+    if let Some(g) = cfg.gnss.as_mut() {
+        // gnss.txt: t, lat, lon [deg], h [m], std N E D [m], velocity and its std.
+        let mut csv = CsvGnssOptions::lla(0, [1, 2, 3]);
+        csv.pos_std_cols = Some([4, 5, 6]);
+        g.format = GnssFormat::Csv(csv);
+    }
+}
+
+/// Seed 002's NHC: v_y = v_z = 0 with 0.1 m/s (its eq. 12 and Fig. 4), always, at
+/// 2 Hz (6.7 in docs/RESULTS.md); the lever arm to the rear axle known, the mounting
+/// estimated.
+pub(crate) fn seed002_nhc(cfg: &mut RunConfig, sc: &Scenario) {
+    vehicle_installation(cfg, sc);
+    cfg.nav.nhc.mode = NhcMode::Always;
+    cfg.nav.nhc.rate_hz = 2.0;
 }
 
 /// Seed 004 without GNSS: surveyed start position (the truth), static alignment by
