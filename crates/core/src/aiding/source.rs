@@ -11,11 +11,11 @@
 use crate::aiding::{Aiding, AidingContext, Linearized, ReceiverClock, VehicleEstimate};
 use crate::events::{AidStatus, Event, InnovationRow, RunSummary, UpdateKind};
 use crate::filter::UpdateOutcome;
-use crate::smoother::em::FusedUpdate;
 use crate::integrity::IntegrityState;
 use crate::nav::ins_filter::{BlockProcess, BlockSpec, Fused, InsFilter};
 use crate::nav::timeline::TimeDirection;
 use crate::six_state::SixState;
+use crate::smoother::em::FusedUpdate;
 use crate::state::{Block, StateLayout};
 use crate::types::{ImuErrors, ImuSample, Measurement, NavState};
 use nalgebra::{DMatrix, DVector, Vector3};
