@@ -19,12 +19,13 @@
 mod attack;
 pub mod batch;
 mod bench;
+pub mod kfgins_convert;
 mod navigate;
 mod pool;
 mod reproduce;
 mod scenarios;
-pub mod tuning;
 pub mod track;
+pub mod tuning;
 mod work;
 
 use std::path::PathBuf;
