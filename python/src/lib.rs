@@ -144,6 +144,7 @@ fn run(
                 smooth,
                 smooth_mode,
                 formats,
+                ..Default::default()
             }
             .apply(&mut cfg)
             .map_err(|e| (e, None))?;

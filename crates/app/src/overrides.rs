@@ -1,5 +1,5 @@
 //! What `navfuse run`'s options change in a configuration (`--outages`, `--smooth`,
-//! `--smooth-mode`, `--formats`), for every caller that offers them (the CLI,
+//! `--smooth-mode`, `--formats`, `--time-snap`), for every caller that offers them (the CLI,
 //! `navfuse batch`, Python).
 
 use crate::error::Error;
@@ -19,6 +19,8 @@ pub struct RunOverrides {
     pub smooth_mode: Option<String>,
     /// `--formats LIST`: exports added to `[output] formats`.
     pub formats: Option<String>,
+    /// `--time-snap S`: `[gnss] time_snap_s` \[s\] (KF-GINS: 0.001).
+    pub time_snap_s: Option<f64>,
 }
 
 impl RunOverrides {
@@ -38,6 +40,14 @@ impl RunOverrides {
                     cfg.output.formats.push(f);
                 }
             }
+        }
+        if let Some(s) = self.time_snap_s {
+            if !(0.0..=0.05).contains(&s) {
+                return Err(Error::Other(format!(
+                    "--time-snap: expected a tolerance in [0, 0.05] s (KF-GINS uses 0.001), found {s}"
+                )));
+            }
+            cfg.nav.gnss.time_snap_s = s;
         }
         if self.smooth || self.smooth_mode.is_some() {
             cfg.smoother.enabled = true;

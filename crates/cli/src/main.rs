@@ -104,6 +104,12 @@ enum Command {
         /// kml, geojson, gpx (docs/FORMATS.md "Exports").
         #[arg(long, value_name = "LIST")]
         formats: Option<String>,
+        /// Apply a GNSS fix within S seconds of an IMU epoch at that epoch, as
+        /// KF-GINS does with 0.001 (as `[gnss] time_snap_s`; default 0: each fix at
+        /// its own time, the IMU interval split there). Moves a fix by up to S: a
+        /// position error of up to speed x S.
+        #[arg(long = "time-snap", value_name = "S")]
+        time_snap: Option<f64>,
         /// No progress bar and no summary line.
         #[arg(long, short)]
         quiet: bool,
@@ -483,6 +489,7 @@ fn main() -> ExitCode {
             smooth,
             smooth_mode,
             formats,
+            time_snap,
             quiet,
         } => run_cmd::main(
             config,
@@ -490,6 +497,7 @@ fn main() -> ExitCode {
             out,
             outages,
             (smooth, smooth_mode, formats),
+            time_snap,
             quiet,
         ),
         Command::Export {

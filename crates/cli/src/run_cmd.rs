@@ -14,6 +14,7 @@ pub fn main(
     out: Option<PathBuf>,
     outages: Option<String>,
     (smooth, smooth_mode, formats): (bool, Option<String>, Option<String>),
+    time_snap_s: Option<f64>,
     quiet: bool,
 ) -> Result<()> {
     let path = kf_gins
@@ -33,6 +34,7 @@ pub fn main(
         smooth,
         smooth_mode,
         formats,
+        time_snap_s,
     }
     .apply(&mut cfg)?;
     let out_dir = out

@@ -167,6 +167,10 @@ impl Default for TimeOffsetConfig {
 pub struct GnssOptions {
     /// Antenna phase centre in the body frame, from the IMU centre (F, R, D) \[m\].
     pub lever_arm_b: Vector3<f64>,
+    /// A GNSS-clock input within this of an IMU epoch is applied at that epoch
+    /// (KF-GINS: 1 ms; nav/timeline.rs); 0 = at its own time, the IMU interval split
+    /// there \[s\].
+    pub time_snap_s: f64,
     /// Use the fix's velocity, when present.
     pub use_velocity: bool,
     /// Replace per-epoch position std with this (N, E, D) \[m\].
@@ -206,6 +210,7 @@ impl Default for GnssOptions {
     fn default() -> Self {
         GnssOptions {
             lever_arm_b: Vector3::zeros(),
+            time_snap_s: 0.0,
             use_velocity: true,
             position_std_override: None,
             velocity_std_override: None,

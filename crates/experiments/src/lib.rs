@@ -19,6 +19,7 @@
 mod attack;
 pub mod batch;
 mod bench;
+pub mod kfgins_convert;
 mod navigate;
 mod pool;
 mod reproduce;

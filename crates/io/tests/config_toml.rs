@@ -63,6 +63,7 @@ format = "rtklib-pos"
 quality = [1, 2]
 decimate_s = 1.0
 time_offset_s = 0.01
+time_snap_s = 0.001
 lever_arm_m = [0.1, -0.05, -0.2]
 use_velocity = false
 position_std_m = [0.02, 0.03, 0.05]
@@ -209,6 +210,7 @@ fn check_full(c: &RunConfig, base: &Path) {
     assert_eq!(g.decimate_s, Some(1.0));
     assert_eq!(g.time_offset_s, 0.01);
     let go = &c.nav.gnss;
+    assert_eq!(go.time_snap_s, 0.001);
     assert_close3(&go.lever_arm_b, [0.1, -0.05, -0.2]);
     assert!(!go.use_velocity);
     assert_close3(
@@ -685,6 +687,8 @@ fn range_errors_name_key_and_expectation() {
         ("[gnss]\nfile = \"g\"\nformat = \"rtklib-pos\"\nquality = []", "gnss.quality", "non-empty"),
         ("[gnss]\nfile = \"g\"\nformat = \"rtklib-pos\"\nquality = [9]", "gnss.quality", "1..=6"),
         ("[gnss]\nfile = \"g\"\nformat = \"kf-gins\"\ndecimate_s = 0", "gnss.decimate_s", "> 0"),
+        ("[gnss]\nfile = \"g\"\nformat = \"kf-gins\"\ntime_snap_s = -0.001", "gnss.time_snap_s", "[0, 0.05]"),
+        ("[gnss]\nfile = \"g\"\nformat = \"kf-gins\"\ntime_snap_s = nan", "gnss.time_snap_s", "[0, 0.05]"),
         ("[gnss]\nfile = \"g\"\nformat = \"kf-gins\"\nposition_std_m = [1, 1]", "gnss.position_std_m", "3 numbers"),
         ("[gnss]\nfile = \"g\"\nformat = \"kf-gins\"\noutages = [[1, 2], [5, 3]]", "gnss.outages[1]", "end > start"),
         ("[gnss]\nfile = \"g\"\nformat = \"kf-gins\"\noutages = [[1, 2, 3]]", "gnss.outages[0]", "[start, end]"),

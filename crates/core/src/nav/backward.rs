@@ -94,7 +94,8 @@ pub fn run_backward<E: From<NavError>>(
         ],
     });
     // Inputs at or after the initial epoch are not used (the mirror of forward).
-    let mut inbox = ReverseInbox::new(measurements, &cfg.gnss.outages);
+    let mut inbox =
+        ReverseInbox::new(measurements, &cfg.gnss.outages).with_gnss_snap(cfg.gnss.time_snap_s);
     let offset0 = n.time_offset();
     let after = inbox.skip_while(|m| effective_time(m, offset0) >= start.t);
     n.summary_mut().gnss_before_start += after

@@ -370,7 +370,7 @@ impl Navigator {
         let gap = self.begin_step(&s);
         // Each measurement due in (t_k - dt, t_k]: integrate up to its time, apply it.
         let mut rest = IntervalRest::new(s);
-        while let Some(due) = inbox.next_due(s.t, self.time_offset()) {
+        while let Some(due) = inbox.next_due_in(s.t - s.dt, s.t, self.time_offset()) {
             match due {
                 Due::Withheld(m) => self.count_withheld(m),
                 Due::Apply { m, t_eff } => {
@@ -399,7 +399,7 @@ impl Navigator {
         let s = *imu;
         let gap = self.begin_step(&s);
         let mut rest = ReverseRest::new(s);
-        while let Some(due) = inbox.next_due(s.t - s.dt, self.time_offset()) {
+        while let Some(due) = inbox.next_due_in(s.t - s.dt, s.t, self.time_offset()) {
             match due {
                 Due::Withheld(m) => self.count_withheld(m),
                 Due::Apply { m, t_eff } => {

@@ -207,7 +207,8 @@ fn drive<E: From<NavError>>(
         ],
     });
     // Inputs up to the initial epoch are not used.
-    let mut inbox = Inbox::new(measurements, &cfg.gnss.outages);
+    let mut inbox =
+        Inbox::new(measurements, &cfg.gnss.outages).with_gnss_snap(cfg.gnss.time_snap_s);
     let offset0 = n.time_offset();
     let before = inbox.skip_while(|m| {
         effective_time(m, offset0) <= start.t0 || (m.on_gnss_clock() && m.t() <= start.used_until)

@@ -39,6 +39,7 @@ pub(crate) fn cfg() -> NavConfig {
         imu_noise: noise,
         gnss: GnssOptions {
             lever_arm_b: Vector3::new(0.5, 0.2, -1.0),
+            time_snap_s: 0.0,
             use_velocity: false,
             position_std_override: None,
             velocity_std_override: None,
@@ -425,4 +426,90 @@ fn outage_windows_withhold_fixes() {
     )
     .unwrap();
     assert_eq!((s.gnss_used, s.gnss_in_outage), (3, 1));
+}
+
+/// `[gnss] time_snap_s` (KF-GINS's 1 ms rule, timeline.rs): over random IMU rates with
+/// jittered epochs, tolerances and fixes within the tolerance before or after an IMU
+/// epoch, the run equals the exact run with each fix moved to that epoch (the output
+/// at the epoch has the update), and differs from the exact run with the fixes at
+/// their own times.
+#[test]
+fn snapped_fixes_equal_fixes_at_the_imu_epoch() {
+    use rand::{RngExt, SeedableRng};
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(30);
+    for case in 0..12 {
+        let mut c = cfg();
+        let dt = 1.0 / rng.random_range(50.0..400.0);
+        let mut t = 0.0;
+        let imu: Vec<ImuSample> = (0..(3.0 / dt) as usize)
+            .map(|_| {
+                let h = dt * rng.random_range(0.8..1.2);
+                t += h;
+                static_sample(&c, t, h)
+            })
+            .collect();
+        let tol = rng.random_range(0.05..0.39) * dt;
+        let lla = c.initial.lla.unwrap();
+        let AttitudeInit::Given(rpy) = c.initial.attitude else {
+            unreachable!()
+        };
+        // Fixes metres off, at random IMU epochs moved by up to the tolerance.
+        let picks: Vec<(f64, f64, Vector3<f64>)> = (0..6)
+            .map(|k| {
+                let e = imu[(k + 1) * imu.len() / 8].t;
+                let off = Vector3::new(
+                    rng.random_range(-2.0..2.0),
+                    rng.random_range(-2.0..2.0),
+                    0.0,
+                );
+                (e, e + rng.random_range(-0.99..0.99) * tol, off)
+            })
+            .collect();
+        let fixes = |at_epoch: bool| -> Vec<GnssFix> {
+            picks
+                .iter()
+                .map(|&(e, t, off)| GnssFix {
+                    t: if at_epoch { e } else { t },
+                    lla: lla_add_ned(&lla, &(c_bn_from_euler(&rpy) * c.gnss.lever_arm_b + off)),
+                    std_ned: Vector3::repeat(0.1),
+                    vel_ned: None,
+                    vel_std_ned: None,
+                })
+                .collect()
+        };
+        let outputs = |c: &NavConfig, f: &[GnssFix]| {
+            let mut out = Vec::new();
+            run::<NavError>(
+                c,
+                imu.iter().map(|s| Ok(*s)),
+                &crate::types::merge_measurements(f, &[], &[]),
+                None,
+                |n| {
+                    out.push(*n.nav());
+                    Ok(())
+                },
+                |_| {},
+            )
+            .unwrap();
+            out
+        };
+        let exact_at_epoch = outputs(&c, &fixes(true));
+        let exact = outputs(&c, &fixes(false));
+        c.gnss.time_snap_s = tol;
+        let snapped = outputs(&c, &fixes(false));
+        assert_eq!(snapped.len(), exact_at_epoch.len());
+        let worst = |a: &[NavState], b: &[NavState]| {
+            a.iter()
+                .zip(b)
+                .map(|(x, y)| crate::earth::lla_diff_ned(&x.lla, &y.lla).norm())
+                .fold(0.0, f64::max)
+        };
+        let d_snap = worst(&snapped, &exact_at_epoch);
+        let d_exact = worst(&exact, &exact_at_epoch);
+        assert!(d_snap < 1e-9, "case {case}: snapped vs at epoch {d_snap} m");
+        assert!(
+            d_exact > 0.1,
+            "case {case}: exact vs at epoch only {d_exact} m"
+        );
+    }
 }

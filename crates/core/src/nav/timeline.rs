@@ -7,6 +7,12 @@
 //!   measurement is applied, and integration continues from there.
 //! - Times within [`SNAP_S`] of the time already reached, or of the interval's end,
 //!   are taken as that time (no sliver of an interval is integrated).
+//! - Optionally (`[gnss] time_snap_s`, [`Inbox::with_gnss_snap`]) an input on the GNSS
+//!   clock within a tolerance tol of an IMU epoch is applied at that epoch, as
+//!   KF-GINS does with 1 ms (its `isToUpdate`): in the interval (t_a, t_b] its time t
+//!   is taken as t_a when |t - t_a| < tol, else as t_b when |t - t_b| <= tol (a fix up
+//!   to tol after t_b comes due at t_b); the inputs are handed over in the order of
+//!   these times. Moving a fix by up to tol costs up to v * tol of position.
 //! - Measurements at equal times are applied in the order of the merged list
 //!   (`merge_measurements`: GNSS, then odometer, then heading); the second one at a
 //!   time integrates nothing.
@@ -200,7 +206,8 @@ impl ReverseRest {
 /// What the inbox hands over next.
 #[derive(Debug)]
 pub enum Due<'a> {
-    /// Apply at `t_eff` (IMU time scale).
+    /// Apply at `t_eff` (IMU time scale): the effective time, or the IMU epoch it
+    /// is snapped to ([`Inbox::with_gnss_snap`]).
     Apply { m: &'a Measurement, t_eff: f64 },
     /// Inside a configured GNSS outage: not applied.
     Withheld(&'a Measurement),
@@ -227,6 +234,8 @@ pub struct Inbox<'a> {
     /// Index of the next input on each clock ([`clock`]; `meas.len()` when none).
     next: [usize; 2],
     outages: &'a OutageSchedule,
+    /// Each clock's snap tolerance \[s\] ([`Inbox::with_gnss_snap`]).
+    snap_s: [f64; 2],
 }
 
 /// Time of validity on the IMU time scale: GNSS-clock inputs shifted by the offset.
@@ -237,6 +246,37 @@ pub fn effective_time(m: &Measurement, time_offset_s: f64) -> f64 {
         } else {
             0.0
         }
+}
+
+/// Time `t` as applied in the forward IMU interval (t_a, t_b] with snap tolerance
+/// `tol` (KF-GINS's `isToUpdate`, gi_engine.cpp): t_a when |t - t_a| < tol, else t_b
+/// when |t - t_b| <= tol, else `t`.
+#[inline]
+fn snapped(t: f64, tol: f64, t_a: f64, t_b: f64) -> f64 {
+    if tol <= 0.0 {
+        t
+    } else if (t - t_a).abs() < tol {
+        t_a
+    } else if (t - t_b).abs() <= tol {
+        t_b
+    } else {
+        t
+    }
+}
+
+/// The mirror of [`snapped`] for a backward run through [t_a, t_b): the upper end
+/// (reached first) when |t - t_b| < tol, else t_a when |t - t_a| <= tol.
+#[inline]
+fn snapped_down(t: f64, tol: f64, t_a: f64, t_b: f64) -> f64 {
+    if tol <= 0.0 {
+        t
+    } else if (t - t_b).abs() < tol {
+        t_b
+    } else if (t - t_a).abs() <= tol {
+        t_a
+    } else {
+        t
+    }
 }
 
 /// First index at or after `from` of an input on clock `c` (`meas.len()` when none).
@@ -261,17 +301,26 @@ impl<'a> Inbox<'a> {
             meas,
             next: [seek_up(meas, 0, 0), seek_up(meas, 0, 1)],
             outages,
+            snap_s: [0.0; 2],
         }
     }
 
-    /// The clock whose next input comes first at `time_offset_s`, with its index and
-    /// effective time.
-    fn first(&self, time_offset_s: f64) -> Option<(usize, usize, f64)> {
+    /// GNSS-clock inputs within `snap_s` \[s\] of an IMU epoch are applied at it
+    /// (module documentation); 0 (the default): at their own time.
+    pub fn with_gnss_snap(mut self, snap_s: f64) -> Self {
+        self.snap_s[0] = snap_s.max(0.0);
+        self
+    }
+
+    /// The clock whose next input comes first at `time_offset_s` in the interval
+    /// (t_a, t_b], with its index and application time ([`snapped`]).
+    fn first(&self, time_offset_s: f64, t_a: f64, t_b: f64) -> Option<(usize, usize, f64)> {
         let cand = |c: usize| {
             let i = self.next[c];
-            self.meas
-                .get(i)
-                .map(|m| (c, i, effective_time(m, time_offset_s)))
+            self.meas.get(i).map(|m| {
+                let t = effective_time(m, time_offset_s);
+                (c, i, snapped(t, self.snap_s[c], t_a, t_b))
+            })
         };
         match (cand(0), cand(1)) {
             (Some(a), Some(b)) => Some(if (b.2, b.1) < (a.2, a.1) { b } else { a }),
@@ -297,7 +346,13 @@ impl<'a> Inbox<'a> {
 
     /// The next measurement whose effective time is at or before `t_end`.
     pub fn next_due(&mut self, t_end: f64, time_offset_s: f64) -> Option<Due<'a>> {
-        let (c, i, t_eff) = self.first(time_offset_s)?;
+        self.next_due_in(f64::NEG_INFINITY, t_end, time_offset_s)
+    }
+
+    /// The next measurement due in the IMU interval (t_start, t_end]: its effective
+    /// time, snapped to t_start or t_end by its clock's tolerance, at or before t_end.
+    pub fn next_due_in(&mut self, t_start: f64, t_end: f64, time_offset_s: f64) -> Option<Due<'a>> {
+        let (c, i, t_eff) = self.first(time_offset_s, t_start, t_end)?;
         if t_eff > t_end {
             return None;
         }
@@ -320,6 +375,7 @@ pub struct ReverseInbox<'a> {
     /// One past the next input to hand over on each clock (counting down; 0: none).
     next: [usize; 2],
     outages: &'a OutageSchedule,
+    snap_s: [f64; 2],
 }
 
 impl<'a> ReverseInbox<'a> {
@@ -329,13 +385,23 @@ impl<'a> ReverseInbox<'a> {
             meas,
             next: [seek_down(meas, n, 0), seek_down(meas, n, 1)],
             outages,
+            snap_s: [0.0; 2],
         }
     }
 
-    fn last(&self, time_offset_s: f64) -> Option<(usize, usize, f64)> {
+    /// As [`Inbox::with_gnss_snap`].
+    pub fn with_gnss_snap(mut self, snap_s: f64) -> Self {
+        self.snap_s[0] = snap_s.max(0.0);
+        self
+    }
+
+    /// The clock whose next input (going down) comes first in the interval
+    /// [t_a, t_b), with its index and application time ([`snapped_down`]).
+    fn last(&self, time_offset_s: f64, t_a: f64, t_b: f64) -> Option<(usize, usize, f64)> {
         let cand = |c: usize| {
             let i = self.next[c].checked_sub(1)?;
-            Some((c, i, effective_time(&self.meas[i], time_offset_s)))
+            let t = effective_time(&self.meas[i], time_offset_s);
+            Some((c, i, snapped_down(t, self.snap_s[c], t_a, t_b)))
         };
         match (cand(0), cand(1)) {
             (Some(a), Some(b)) => Some(if (b.2, b.1) > (a.2, a.1) { b } else { a }),
@@ -366,7 +432,13 @@ impl<'a> ReverseInbox<'a> {
     /// The next (latest remaining) measurement whose effective time is at or after
     /// `t_low`, the lower end of the interval being integrated.
     pub fn next_due(&mut self, t_low: f64, time_offset_s: f64) -> Option<Due<'a>> {
-        let (c, i, t_eff) = self.last(time_offset_s)?;
+        self.next_due_in(t_low, f64::INFINITY, time_offset_s)
+    }
+
+    /// The mirror of [`Inbox::next_due_in`]: the next (latest remaining) measurement
+    /// due in [t_low, t_high), snapped by [`snapped_down`], at or after t_low.
+    pub fn next_due_in(&mut self, t_low: f64, t_high: f64, time_offset_s: f64) -> Option<Due<'a>> {
+        let (c, i, t_eff) = self.last(time_offset_s, t_low, t_high)?;
         if t_eff < t_low {
             return None;
         }
@@ -713,5 +785,121 @@ mod tests {
         assert_eq!(due_down_to(1.1, &mut inbox), vec![(true, 1.2, true)]);
         assert_eq!(due_down_to(0.0, &mut inbox), vec![(false, 1.0, true)]);
         assert!(due_down_to(-10.0, &mut inbox).is_empty());
+    }
+
+    /// Where each input is applied: (its index in `meas`, the time reached when it
+    /// is applied), walking the IMU epochs `epochs` forward (or backward) as the
+    /// navigator does, with the GNSS snap tolerance `tol`.
+    fn applied_at(
+        meas: &[Measurement],
+        epochs: &[f64],
+        tol: f64,
+        backward: bool,
+    ) -> Vec<(usize, f64)> {
+        let none = OutageSchedule::default();
+        let idx = |m: &Measurement| meas.iter().position(|x| std::ptr::eq(x, m)).unwrap();
+        let mut got = Vec::new();
+        let pieces = epochs.windows(2).map(|w| sample(w[1], w[1] - w[0]));
+        if !backward {
+            let mut inbox = Inbox::new(meas, &none).with_gnss_snap(tol);
+            for s in pieces {
+                let mut rest = IntervalRest::new(s);
+                while let Some(Due::Apply { m, t_eff }) = inbox.next_due_in(s.t - s.dt, s.t, 0.0) {
+                    rest.cut_until(t_eff);
+                    got.push((idx(m), rest.t_reached()));
+                }
+            }
+        } else {
+            let mut inbox = ReverseInbox::new(meas, &none).with_gnss_snap(tol);
+            for s in pieces.rev() {
+                let mut rest = ReverseRest::new(s);
+                while let Some(Due::Apply { m, t_eff }) = inbox.next_due_in(s.t - s.dt, s.t, 0.0) {
+                    rest.cut_until(t_eff);
+                    got.push((idx(m), rest.t_reached()));
+                }
+            }
+            got.reverse();
+        }
+        got
+    }
+
+    /// The snap rule (KF-GINS's `isToUpdate` with its tolerance): over random IMU
+    /// rates with jittered epochs, random tolerances below half an interval and fixes
+    /// on, within the tolerance of and between epochs, each fix is applied at the
+    /// nearest IMU epoch when within the tolerance of it, else at its own time; the
+    /// odometer (IMU clock) is never moved; forward and backward runs apply every
+    /// input at the same time; a zero tolerance is the exact rule.
+    #[test]
+    fn gnss_inputs_within_the_snap_tolerance_are_applied_at_the_imu_epoch() {
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(30);
+        for trial in 0..300 {
+            let dt = 1.0 / rng.random_range(50.0..400.0);
+            let mut epochs = vec![100.0];
+            for _ in 0..200 {
+                let last = *epochs.last().unwrap();
+                epochs.push(last + dt * rng.random_range(0.8..1.2));
+            }
+            let tol = if trial % 4 == 0 {
+                0.0
+            } else {
+                rng.random_range(0.01..0.39) * dt
+            };
+            let near = |t: f64| {
+                let k = epochs.partition_point(|&e| e < t);
+                [k.saturating_sub(1), k.min(epochs.len() - 1)]
+                    .into_iter()
+                    .map(|i| epochs[i])
+                    .min_by(|a, b| (a - t).abs().total_cmp(&(b - t).abs()))
+                    .unwrap()
+            };
+            let pick = |rng: &mut rand_pcg::Pcg64| {
+                let e = epochs[rng.random_range(2..epochs.len() - 2)];
+                match rng.random_range(0..3) {
+                    0 => e,
+                    1 => e + rng.random_range(-0.999..0.999) * tol,
+                    _ => e + rng.random_range(-0.5..0.5) * dt,
+                }
+            };
+            let mut tg: Vec<f64> = (0..8).map(|_| pick(&mut rng)).collect();
+            let mut to: Vec<f64> = (0..8).map(|_| pick(&mut rng)).collect();
+            tg.sort_by(f64::total_cmp);
+            to.sort_by(f64::total_cmp);
+            tg.dedup();
+            to.dedup();
+            let g: Vec<_> = tg.iter().map(|&t| fix(t)).collect();
+            let o: Vec<_> = to.iter().map(|&t| odo(t)).collect();
+            let meas = crate::types::merge_measurements(&g, &o, &[]);
+            let fwd = applied_at(&meas, &epochs, tol, false);
+            assert_eq!(fwd.len(), meas.len(), "trial {trial}");
+            for &(i, t_applied) in &fwd {
+                let t = meas[i].t();
+                let e = near(t);
+                let want = if meas[i].on_gnss_clock() && (t - e).abs() <= tol {
+                    e
+                } else {
+                    t
+                };
+                assert!(
+                    (t_applied - want).abs() <= 2.0 * SNAP_S,
+                    "trial {trial}: input at {t} (gnss {}) applied at {t_applied}, want {want} (tol {tol})",
+                    meas[i].on_gnss_clock()
+                );
+            }
+            // Applied in time order (each clock in its own order).
+            assert!(fwd.windows(2).all(|w| w[0].1 <= w[1].1 + 2.0 * SNAP_S));
+            let mut bwd = applied_at(&meas, &epochs, tol, true);
+            let mut f2 = fwd.clone();
+            f2.sort_by_key(|x| x.0);
+            bwd.sort_by_key(|x| x.0);
+            for (a, b) in f2.iter().zip(&bwd) {
+                assert_eq!(a.0, b.0);
+                assert!(
+                    (a.1 - b.1).abs() <= 2.0 * SNAP_S,
+                    "trial {trial}: {a:?} {b:?} t {} gnss {} tol {tol} dt {dt}",
+                    meas[a.0].t(),
+                    meas[a.0].on_gnss_clock()
+                );
+            }
+        }
     }
 }

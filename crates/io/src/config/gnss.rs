@@ -20,6 +20,10 @@ use super::values::{Gate, Num3, OneOrMany, Strings};
 use super::RelativeOutage;
 use crate::input::{Coupling, GnssFormat, GnssSource};
 
+/// Largest `[gnss] time_snap_s` \[s\]: a fix moved further than this is not a
+/// rounding of time tags.
+const MAX_TIME_SNAP_S: f64 = 0.05;
+
 /// `gnss.format`. A raw type: `GnssFormat`'s variants carry `gnss.quality` and the
 /// RINEX keys.
 #[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
@@ -105,6 +109,8 @@ pub(super) struct TGnss {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) time_offset_s: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) time_snap_s: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) lever_arm_m: Option<Vec<f64>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) use_velocity: Option<bool>,
@@ -177,6 +183,7 @@ impl TGnss {
             skip_lines: None,
             decimate_s: None,
             time_offset_s: None,
+            time_snap_s: None,
             lever_arm_m: None,
             use_velocity: None,
             position_std_m: None,
@@ -410,8 +417,20 @@ pub(super) fn convert(
 
     let (outages, relative) = outages::convert(g.outages.as_ref(), g.outage_every.as_ref(), start)?;
 
+    let time_snap_s = match g.time_snap_s {
+        None => d.time_snap_s,
+        Some(s) if (0.0..=MAX_TIME_SNAP_S).contains(&s) => s,
+        Some(s) => {
+            return Err(kerr(
+                "gnss.time_snap_s",
+                format!("expected a tolerance in [0, {MAX_TIME_SNAP_S}] s (0 = each fix at its own time; KF-GINS uses 0.001), got {s}"),
+            ))
+        }
+    };
+
     let fusion = convert_fusion(g, tight.enabled)?;
     let opts = GnssOptions {
+        time_snap_s,
         lever_arm_b,
         use_velocity: g.use_velocity.unwrap_or(d.use_velocity),
         position_std_override,
@@ -549,6 +568,7 @@ pub(super) fn to_toml(
         skip_lines: g.skip_lines,
         decimate_s: g.decimate_s,
         time_offset_s: Some(g.time_offset_s),
+        time_snap_s: (go.time_snap_s != 0.0).then_some(go.time_snap_s),
         lever_arm_m: Some(arr3(&go.lever_arm_b).to_vec()),
         use_velocity: Some(go.use_velocity),
         position_std_m: go
