@@ -414,7 +414,7 @@ mod tests {
             let mut a = Eskf::new(p.clone());
             let mut s = Eskf::new(p.clone());
             let (out, terms) = a.update_joint(&y, &h, &r, None);
-            let UpdateOutcome::Applied { dx, nis } = out else {
+            let UpdateOutcome::Applied { dx, nis, .. } = out else {
                 panic!("trial {trial}: {out:?}")
             };
             let terms = terms.unwrap();

@@ -23,8 +23,8 @@ mod navigate;
 mod pool;
 mod reproduce;
 mod scenarios;
-pub mod tuning;
 pub mod track;
+pub mod tuning;
 mod work;
 
 use std::path::PathBuf;

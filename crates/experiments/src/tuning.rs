@@ -125,12 +125,7 @@ fn nees_band(n: usize) -> (f64, f64) {
 
 /// The figures of `cfg` against `truth` (None: against `truth_cfg`'s own fixes
 /// through `lever_arm`), with `gaps`.
-fn figures(
-    cfg: &RunConfig,
-    truth: &Truth,
-    gaps: &str,
-    smooth_separation: bool,
-) -> Result<Figures> {
+fn figures(cfg: &RunConfig, truth: &Truth, gaps: &str, smooth_separation: bool) -> Result<Figures> {
     let (recs, job, _) = run_kept(cfg.clone(), None, false)?;
     let sol = solution_track(&recs);
     let opts = EvalOptions {
@@ -163,9 +158,9 @@ fn figures(
     };
     let separation_flagged = if smooth_separation {
         let (_, job_s, _) = run_kept(cfg.clone(), None, true)?;
-        job_s.smoother.map(|s| {
-            s.separation_flagged as f64 / (s.separation_rows.max(1)) as f64
-        })
+        job_s
+            .smoother
+            .map(|s| s.separation_flagged as f64 / (s.separation_rows.max(1)) as f64)
     } else {
         None
     };
@@ -197,7 +192,11 @@ struct Truth {
 fn tuned(hand: &RunConfig) -> Result<(RunConfig, f64, f64)> {
     let untuned = hand.without_noise_model();
     let t = Instant::now();
-    let r = tune(untuned.clone(), &TuneOptions::default(), &RunOptions::default())?;
+    let r = tune(
+        untuned.clone(),
+        &TuneOptions::default(),
+        &RunOptions::default(),
+    )?;
     let wall = t.elapsed().as_secs_f64();
     let mut cfg = untuned;
     copy_noise_model(&r.tuned.nav, &mut cfg.nav);
@@ -361,7 +360,10 @@ fn verdicts(c: &CaseResult, real_drive: bool) -> Vec<(String, bool)> {
         ));
         if let Some(s) = c.tuned.separation_flagged {
             v.push((
-                format!("smoother separation beyond 3 sigma {:.1} % (<= 5 %)", 100.0 * s),
+                format!(
+                    "smoother separation beyond 3 sigma {:.1} % (<= 5 %)",
+                    100.0 * s
+                ),
                 s <= 0.05,
             ));
         }
@@ -381,7 +383,10 @@ pub fn main(a: &TuneBenchArgs) -> Result<()> {
     let mut cases: Vec<(CaseResult, bool)> = Vec::new();
     for (name, white, odo) in SIM_CASES {
         eprintln!("navfuse bench --tune: {name}, {} seeds", a.seeds);
-        cases.push((sim_case(work.path(), name, white, odo, a.seeds.max(1))?, false));
+        cases.push((
+            sim_case(work.path(), name, white, odo, a.seeds.max(1))?,
+            false,
+        ));
     }
     let shared = Path::new("../shared/data");
     if !a.sim_only {
@@ -451,14 +456,22 @@ pub fn main(a: &TuneBenchArgs) -> Result<()> {
             "verdicts": v.iter().map(|(w, p)| json!({"what": w, "pass": p})).collect::<Vec<_>>(),
         }));
         if !a.json {
-            println!("{} ({} seed{}):", c.name, c.seeds, if c.seeds == 1 { "" } else { "s" });
+            println!(
+                "{} ({} seed{}):",
+                c.name,
+                c.seeds,
+                if c.seeds == 1 { "" } else { "s" }
+            );
             for (w, p) in &v {
                 println!("  {} {w}", if *p { "PASS" } else { "FAIL" });
             }
         }
     }
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&json!({"cases": out, "pass": all_pass}))?);
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&json!({"cases": out, "pass": all_pass}))?
+        );
     } else {
         println!("{}", if all_pass { "PASS" } else { "FAIL" });
     }

@@ -108,8 +108,7 @@ impl RunConfig {
     /// and of its benchmark.
     pub fn without_noise_model(&self) -> RunConfig {
         use navfuse_core::config::{
-            FixErrorOptions, GnssOptions, NhcOptions, OdometerOptions, VehicleOptions,
-            ZuptOptions,
+            FixErrorOptions, GnssOptions, NhcOptions, OdometerOptions, VehicleOptions, ZuptOptions,
         };
         let mut c = self.clone();
         let mut defaulted = Vec::new();
