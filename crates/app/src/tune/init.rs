@@ -141,7 +141,7 @@ mod tests {
     #[test]
     fn white_noise_density_is_found_under_motion() {
         let mut rng = rand_pcg::Pcg64::seed_from_u64(3);
-        let dt = 0.01;
+        let dt: f64 = 0.01;
         let (arw, vrw) = (2e-3, 5e-3); // rad/sqrt(s), m/s/sqrt(s)
         let ng = Normal::new(0.0, arw / dt.sqrt()).unwrap();
         let na = Normal::new(0.0, vrw / dt.sqrt()).unwrap();
