@@ -146,6 +146,12 @@ impl JobResult {
             }))).collect::<std::collections::BTreeMap<_, _>>(),
             "nis_per_row": s.aiding_nis.iter().map(|(k, (sum, rows))| (*k, sum / (*rows).max(1) as f64)).collect::<std::collections::BTreeMap<_, _>>(),
             "static_s": s.static_s,
+            "adaptive_noise": (!s.adaptive_noise.is_empty()).then(|| s.adaptive_noise.iter().map(|(k, p)| (*k, serde_json::json!({
+                "scale": p.scale(),
+                "sd": p.sd(),
+                "std_factor": p.scale().sqrt(),
+                "updates": p.updates,
+            }))).collect::<std::collections::BTreeMap<_, _>>()),
             "odometer_scale": s.odometer_scale.map(|(k, sd)| serde_json::json!({
                 "k_ppm": k * 1e6,
                 "sd_ppm": sd * 1e6,

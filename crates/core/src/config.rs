@@ -427,6 +427,8 @@ pub struct FilterOptions {
     /// (a dt²/2)², with these plausible vehicle dynamics \[m/s², rad/s\].
     pub gap_accel_mps2: f64,
     pub gap_rate: f64,
+    /// Adaptive measurement noise (aiding/adaptive.rs); None = off (the default).
+    pub adaptive_noise: Option<crate::aiding::adaptive::AdaptiveNoiseOptions>,
 }
 
 impl Default for FilterOptions {
@@ -436,6 +438,7 @@ impl Default for FilterOptions {
             time_offset: None,
             gap_accel_mps2: 2.0,
             gap_rate: 10f64.to_radians(),
+            adaptive_noise: None,
         }
     }
 }

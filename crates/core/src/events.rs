@@ -398,6 +398,9 @@ pub struct RunSummary {
     /// Final estimates of the blocks the sources define in their own files
     /// (`Block::Source`): name, values and 1-sigma per state.
     pub source_states: Vec<SourceState>,
+    /// Adaptive measurement noise (aiding/adaptive.rs), when on: the final posterior
+    /// of each source's scale on its configured R.
+    pub adaptive_noise: Vec<(&'static str, crate::aiding::adaptive::ScalePosterior)>,
 }
 
 /// The final estimate of a source's own block.

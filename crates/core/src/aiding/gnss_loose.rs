@@ -101,7 +101,8 @@ impl GnssLoose {
         };
         lin.r *= r_share;
         let dof = lin.y.len();
-        let nis = f.nis(&lin);
+        // Under adaptive noise, with the source's current scale (the update's own).
+        let nis = f.nis_adapted(aiding.name(), &lin);
         let y = Some(lin.y.clone());
         // The gate on NIS / scale: the update's own test sees the scaled threshold.
         let gate = chi2_gate(dof, gate_p).map(|g| g * test_scale);

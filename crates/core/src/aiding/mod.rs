@@ -8,6 +8,7 @@
 //! the NHC and the odometer. [`Aiding`] names the built-in models; a source of your
 //! own linearises itself and fuses with `Fuser::fuse_rows`.
 
+pub mod adaptive;
 pub mod baro;
 pub mod doppler;
 #[cfg(test)]

@@ -8,6 +8,7 @@
 //! keeps the source's uniform [`AidStatus`] (as PX4 EKF2's aid sources do).
 //! `registry.rs` lists the sources.
 
+use crate::aiding::adaptive::{scaled_r, vb_update};
 use crate::aiding::{Aiding, AidingContext, Linearized, ReceiverClock, VehicleEstimate};
 use crate::events::{AidStatus, Event, InnovationRow, RunSummary, UpdateKind};
 use crate::filter::UpdateOutcome;
@@ -238,6 +239,23 @@ impl Fuser<'_> {
         self.ins.filter.nis(&lin.y, &lin.h, &lin.r)
     }
 
+    /// The adaptive noise scale of source `name` as of now (aiding/adaptive.rs): the
+    /// factor the next update of `name` starts from; 1 when adaptive noise is off or
+    /// does not cover `name`.
+    pub fn noise_scale(&self, name: &str) -> f64 {
+        self.ins.adaptive.as_ref().map_or(1.0, |a| a.scale(name))
+    }
+
+    /// [`Fuser::nis`] with R times [`Fuser::noise_scale`] of `name`: the NIS the
+    /// update of `name` is tested with.
+    pub fn nis_adapted(&self, name: &str, lin: &Linearized) -> Option<f64> {
+        let s = self.noise_scale(name);
+        if s == 1.0 {
+            return self.nis(lin);
+        }
+        self.ins.filter.nis(&lin.y, &lin.h, &(&lin.r * s))
+    }
+
     /// Baarda's w-test of stacked rows (filter.rs): (w, blunder) per row.
     pub fn blunder_test(&self, lin: &Linearized) -> Option<Vec<(f64, f64)>> {
         self.ins.filter.blunder_test(&lin.y, &lin.h, &lin.r)
@@ -301,15 +319,23 @@ impl Fuser<'_> {
         nis_stat: Option<f64>,
     ) -> Fused {
         let t = self.time_gnss();
+        let adapted = self.adapt(name, t, lin, gate, nis_stat);
+        let (lin, update_gate, nis_stat) = match &adapted {
+            Some(a) => (&a.lin, a.gate, a.nis_stat),
+            None => (lin, gate, nis_stat),
+        };
         let st = &mut *self.status;
         st.innovation.clear();
         st.innovation.extend(lin.y.iter());
         let entry = self.ins.update_entry(t, name, lin);
-        let outcome = self.ins.update(lin, gate);
+        let outcome = self.ins.update(lin, update_gate);
         if let (Some(mut e), UpdateOutcome::Applied { nis, .. }) = (entry, &outcome) {
             // A row whose R the source inflated (robust down-weighting) has a NIS
             // below that of its reported R.
-            e.down_weighted = nis_stat.is_some_and(|n| *nis < n * (1.0 - 1e-9));
+            e.down_weighted = match &adapted {
+                Some(a) => a.down_weighted,
+                None => nis_stat.is_some_and(|n| *nis < n * (1.0 - 1e-9)),
+            };
             if let Some(log) = self.ins.update_log.as_mut() {
                 log.push(e);
             }
@@ -395,6 +421,116 @@ impl Fuser<'_> {
         }
     }
 
+    /// Adaptive noise for one update of `name` (aiding/adaptive.rs; None when off or
+    /// not covering `name`). The gate and the source's down-weighting test see the
+    /// scale before this update (s^-): an outlier cannot widen its own R to pass.
+    /// Rejected and down-weighted updates are applied (or not) with s^- and do not
+    /// feed the estimate; the others go through the VB fixed point and are applied
+    /// with its R (their gate already passed), recorded with the NIS under s^-.
+    fn adapt(
+        &mut self,
+        name: &'static str,
+        t: f64,
+        lin: &Linearized,
+        gate: Option<f64>,
+        nis_stat: Option<f64>,
+    ) -> Option<Adapted> {
+        let ad = self.ins.adaptive.as_ref()?;
+        if !ad.adapts(name) {
+            return None;
+        }
+        let prior = ad.predicted(name, t);
+        let a = &lin.h * &self.ins.filter.p * lin.h.transpose();
+        let blocks = [(0, lin.y.len(), 0)];
+        let vb = vb_update(&a, &lin.r, &lin.y, &blocks, &[prior], &ad.opt)?;
+        let rejected = gate.is_some_and(|g| vb.nis_prior > g);
+        let down_weighted = nis_stat.is_some_and(|n| vb.nis_prior < n * (1.0 - 1e-9));
+        let with_scale = |s: f64| Linearized {
+            r: &lin.r * s,
+            ..lin.clone()
+        };
+        if rejected || down_weighted {
+            let s = prior.scale().clamp(ad.opt.min_scale, ad.opt.max_scale);
+            return Some(Adapted {
+                lin: with_scale(s),
+                gate,
+                nis_stat: nis_stat.or(Some(vb.nis_prior)),
+                down_weighted,
+            });
+        }
+        let lin = with_scale(vb.scales[0]);
+        if let Some(ad) = self.ins.adaptive.as_mut() {
+            ad.commit(name, vb.posteriors[0], t);
+        }
+        Some(Adapted {
+            lin,
+            gate: None,
+            nis_stat: Some(vb.nis_prior),
+            down_weighted: false,
+        })
+    }
+
+    /// Adaptive noise for the stacked rows of one epoch (`names` per row; the rows of
+    /// each `rows` entry form a block of R): scaled per name, by the VB fixed point
+    /// for a one-shot update that passes its gate under the scales before it (then
+    /// applied ungated, the estimates kept), else by those scales (a sequential update
+    /// gates row by row: it neither changes nor feeds the estimate). None when off.
+    fn adapt_epoch(
+        &mut self,
+        t: f64,
+        rows: &[(&'static str, &Linearized)],
+        stacked: &Linearized,
+        how: EpochUpdate,
+    ) -> Option<(Linearized, EpochUpdate)> {
+        let ad = self.ins.adaptive.as_ref()?;
+        let mut groups: Vec<&'static str> = Vec::new();
+        let mut blocks = Vec::with_capacity(rows.len());
+        let mut k = 0;
+        for (name, l) in rows {
+            let d = l.y.len();
+            if ad.adapts(name) {
+                let g = match groups.iter().position(|n| n == name) {
+                    Some(g) => g,
+                    None => {
+                        groups.push(name);
+                        groups.len() - 1
+                    }
+                };
+                blocks.push((k, d, g));
+            }
+            k += d;
+        }
+        if groups.is_empty() {
+            return None;
+        }
+        let priors: Vec<_> = groups.iter().map(|n| ad.predicted(n, t)).collect();
+        let prior_scales: Vec<f64> = priors
+            .iter()
+            .map(|p| p.scale().clamp(ad.opt.min_scale, ad.opt.max_scale))
+            .collect();
+        let with_scales = |scales: &[f64]| Linearized {
+            r: scaled_r(&stacked.r, &blocks, scales),
+            ..stacked.clone()
+        };
+        let EpochUpdate::OneShot { gate } = how else {
+            return Some((with_scales(&prior_scales), how));
+        };
+        let a = &stacked.h * &self.ins.filter.p * stacked.h.transpose();
+        let Some(vb) = vb_update(&a, &stacked.r, &stacked.y, &blocks, &priors, &ad.opt) else {
+            return Some((with_scales(&prior_scales), how));
+        };
+        if gate.is_some_and(|g| vb.nis_prior > g) {
+            return Some((with_scales(&prior_scales), how));
+        }
+        let lin = with_scales(&vb.scales);
+        if let Some(ad) = self.ins.adaptive.as_mut() {
+            for (name, post) in groups.iter().zip(vb.posteriors) {
+                ad.commit(name, post, t);
+            }
+        }
+        Some((lin, EpochUpdate::OneShot { gate: None }))
+    }
+
     /// Fuse the measurements of one epoch linearised together at the current state
     /// (none fused in between): `rows` as (name, model), each of one or more rows,
     /// applied as `how` says. Carrier-phase measurements need this: their prediction
@@ -411,7 +547,7 @@ impl Fuser<'_> {
     pub fn fuse_epoch(&mut self, rows: &[(&'static str, &Linearized)], how: EpochUpdate) -> Fused {
         self.flush_covariance();
         let lins: Vec<&Linearized> = rows.iter().map(|(_, l)| *l).collect();
-        let Some(stacked) = stack_rows(&lins, self.ins.layout.len()) else {
+        let Some(mut stacked) = stack_rows(&lins, self.ins.layout.len()) else {
             return Fused::NotApplicable;
         };
         let names: Vec<&'static str> = rows
@@ -419,13 +555,32 @@ impl Fuser<'_> {
             .flat_map(|(name, l)| std::iter::repeat_n(*name, l.y.len()))
             .collect();
         let t = self.time_gnss();
-        // Noise identification's log, taken at the state all rows are linearised at.
+        let mut how_applied = how;
+        let mut adapted = false;
+        if let Some((lin, h)) = self.adapt_epoch(t, rows, &stacked, how) {
+            stacked = lin;
+            how_applied = h;
+            adapted = true;
+        }
+        // Noise identification's log, taken at the state all rows are linearised at
+        // (with the R applied).
+        let mut first = 0;
         let entries: Vec<Option<FusedUpdate>> = rows
             .iter()
-            .map(|(name, l)| self.ins.update_entry(t, name, l))
+            .map(|(name, l)| {
+                let d = l.y.len();
+                first += d;
+                if adapted {
+                    let r = stacked.r.view((first - d, first - d), (d, d)).into_owned();
+                    let scaled = Linearized { r, ..(*l).clone() };
+                    self.ins.update_entry(t, name, &scaled)
+                } else {
+                    self.ins.update_entry(t, name, l)
+                }
+            })
             .collect();
         // Per row: (e_i, s_i, outcome), and the total correction.
-        let (per_row, gate, dx) = match how {
+        let (per_row, gate, dx) = match how_applied {
             EpochUpdate::OneShot { gate } => {
                 let (out, terms) = self.ins.update_joint(&stacked, gate);
                 let kind = match &out {
@@ -577,6 +732,15 @@ impl Fuser<'_> {
             self.ins.six_state_out = six.solution(&self.ins.nav);
         }
     }
+}
+
+/// One update of [`Fuser::fuse_named`] under adaptive noise: the rows with the R to
+/// apply, the gate of the update, the NIS to record and whether it was down-weighted.
+struct Adapted {
+    lin: Linearized,
+    gate: Option<f64>,
+    nis_stat: Option<f64>,
+    down_weighted: bool,
 }
 
 /// How [`Fuser::fuse_epoch`] applies the measurements of one epoch.

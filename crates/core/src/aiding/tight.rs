@@ -603,9 +603,16 @@ impl TightGnss {
         let mut dropped = Vec::new();
         while !keep.is_empty() {
             let lins: Vec<&Linearized> = keep.iter().map(|(_, lin)| lin).collect();
-            let Some(stacked) = stack_rows(&lins, f.layout().len()) else {
+            let Some(mut stacked) = stack_rows(&lins, f.layout().len()) else {
                 break;
             };
+            // Under adaptive noise, each row with its source's current scale.
+            for (i, (a, _)) in keep.iter().enumerate() {
+                let s = f.noise_scale(a.name());
+                if s != 1.0 {
+                    stacked.r[(i, i)] *= s;
+                }
+            }
             let Some(tests) = f.blunder_test(&stacked) else {
                 break;
             };

@@ -7,6 +7,7 @@
 //! an update) with the transition matrix built from the mean specific force and rate
 //! over that span (docs/ALGORITHMS.md "Error-state filter"; REFERENCES \[SYS\] §2).
 
+use crate::aiding::adaptive::AdaptiveNoise;
 use crate::aiding::{AidingContext, Linearized, ReceiverClock, VehicleEstimate};
 use crate::attitude::{c_bn_from_euler, q_bn_from_euler};
 use crate::config::{NavConfig, NhcMode};
@@ -111,6 +112,8 @@ pub struct InsFilter {
     /// Which way the run goes in time (nav/backward.rs: backward, the IMU pieces
     /// come time-reversed, dt < 0).
     pub(crate) direction: TimeDirection,
+    /// The adaptive measurement-noise estimate, when on (aiding/adaptive.rs).
+    pub(crate) adaptive: Option<AdaptiveNoise>,
 }
 
 /// What an update applied.
@@ -263,6 +266,7 @@ impl InsFilter {
             innovations: None,
             update_log: None,
             direction: TimeDirection::Forward,
+            adaptive: cfg.filter.adaptive_noise.clone().map(AdaptiveNoise::new),
         }
     }
 

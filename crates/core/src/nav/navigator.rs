@@ -473,6 +473,9 @@ impl Navigator {
         if let Some(i) = ins.layout.index(Block::OdometerScale) {
             s.odometer_scale = Some((ins.vehicle.odometer_scale, ins.filter.std(i)));
         }
+        if let Some(a) = &ins.adaptive {
+            s.adaptive_noise = a.posteriors().to_vec();
+        }
         let mut summary = self.summary.clone();
         summary.source_states = self.ins.source_states();
         for (src, status) in self.sources.iter().zip(self.status.iter_mut()) {
