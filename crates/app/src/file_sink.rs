@@ -521,6 +521,7 @@ fn write_reserved(path: &Path, text: &str) -> std::io::Result<()> {
     let mut f = std::fs::OpenOptions::new()
         .write(true)
         .create(true)
+        .truncate(false)
         .open(path)?;
     f.write_all(text.as_bytes())?;
     f.set_len(text.len() as u64)?;

@@ -439,7 +439,7 @@ const MAX_FIX_NIS_PER_ROW: f64 = 50.0;
 /// The fixes fused, but far outside what the filter expected of them: the solution is
 /// a tug of war between the GNSS and a wrongly configured INS.
 pub fn fix_agreement(nis_per_row: f64) -> Vec<Finding> {
-    if !(nis_per_row > MAX_FIX_NIS_PER_ROW) {
+    if nis_per_row.is_nan() || nis_per_row <= MAX_FIX_NIS_PER_ROW {
         return Vec::new();
     }
     vec![Finding::warning(format!(
@@ -489,7 +489,7 @@ pub struct ImuWindow {
 /// Means over the samples (None without a positive total interval).
 pub fn imu_window(samples: &[ImuSample]) -> Option<ImuWindow> {
     let dt: f64 = samples.iter().map(|s| s.dt).sum();
-    if !(dt > 0.0) {
+    if dt.is_nan() || dt <= 0.0 {
         return None;
     }
     let dv: Vector3<f64> = samples.iter().map(|s| s.dvel).sum();

@@ -40,11 +40,7 @@ pub fn main(
         let done = r
             .rows
             .iter()
-            .filter(|x| {
-                x.error
-                    .as_deref()
-                    .map_or(true, |e| !e.starts_with("not run"))
-            })
+            .filter(|x| x.error.as_deref().is_none_or(|e| !e.starts_with("not run")))
             .count();
         return Err(anyhow::Error::new(navfuse_app::Error::Interrupted(
             navfuse_app::Interrupted { signal, t: None },

@@ -221,10 +221,10 @@ fn smoothed_nees_consistent_and_std_never_larger() {
         s.iter().map(|a| a[k] / RUNS as f64).sum::<f64>() / s.len() as f64
     };
     let names = ["position", "velocity", "attitude"];
-    for k in 0..3 {
+    for (k, name) in names.iter().enumerate() {
         eprintln!(
             "{}: NEES forward {:.2}, smoothed {:.2} (band [{lo:.2}, {hi:.2}])",
-            names[k],
+            name,
             mean(&fwd_sums, k),
             mean(&sums, k)
         );

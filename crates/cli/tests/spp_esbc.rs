@@ -16,7 +16,7 @@ use navfuse_io::gnss::read_gnss;
 use navfuse_io::input::{GnssFormat, GnssSource};
 
 /// The station's position (the observation header's APPROX POSITION XYZ) [m].
-const ESBC_ECEF_M: [f64; 3] = [3_582_105.2910, 532_589.7313, 5_232_754.8054];
+const ESBC_ECEF_M: [f64; 3] = [3_582_105.291, 532_589.731_3, 5_232_754.805_4];
 /// The bound on the per-epoch horizontal difference to rnx2rtkp [m].
 const MAX_DIFF_M: f64 = 0.3;
 

@@ -51,12 +51,12 @@ fn chi2_pdf(dof: usize, x: f64) -> f64 {
 
 /// ln Gamma(dof / 2) for small integer dof.
 fn ln_gamma_half(dof: usize) -> f64 {
-    let mut g: f64 = if dof % 2 == 0 {
+    let mut g: f64 = if dof.is_multiple_of(2) {
         1.0
     } else {
         std::f64::consts::PI.sqrt()
     };
-    let mut a = if dof % 2 == 0 { 1.0 } else { 0.5 };
+    let mut a = if dof.is_multiple_of(2) { 1.0 } else { 0.5 };
     while a < dof as f64 / 2.0 {
         g *= a;
         a += 1.0;
@@ -67,7 +67,7 @@ fn ln_gamma_half(dof: usize) -> f64 {
 /// Exact upper tail of chi-square for integer dof (closed forms).
 fn chi2_upper_tail(dof: usize, x: f64) -> f64 {
     let h = x / 2.0;
-    if dof % 2 == 0 {
+    if dof.is_multiple_of(2) {
         let mut term = 1.0;
         let mut sum = 1.0;
         for i in 1..dof / 2 {
@@ -118,7 +118,7 @@ fn normal_upper_quantile(p: f64) -> f64 {
         -3.969683028665376e1,
         2.209460984245205e2,
         -2.759285104469687e2,
-        1.383577518672690e2,
+        1.383_577_518_672_69e2,
         -3.066479806614716e1,
         2.506628277459239,
     ];

@@ -6,7 +6,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
-/// The chi-square gate threshold moved to [`crate::chi2`]; re-exported for the engine.
+// The chi-square gate threshold moved to [`crate::chi2`]; re-exported for the engine.
 
 /// Result of one measurement update.
 #[derive(Clone, Debug)]

@@ -4,8 +4,8 @@
 //! - Time-correlated part: a first-order Gauss-Markov position error per NED axis,
 //!   b_dot = -b / tau + w, PSD 2 sigma_b² / tau, appended as the `GnssBias` block
 //!   (the shaping-filter, or state-augmentation, method: Gelb 1974 §4.5; Brown & Hwang
-//!   2012 §8.2). A fix is r_GNSS = r_ant + b + v with v white, so y = r_ant,INS + b_est
-//!   - r_GNSS ~ dr + db + ... and R = (1 - rho) std². sigma_b² = rho std² follows the
+//!   2012 §8.2). A fix is r_GNSS = r_ant + b + v with v white, so y = r_ant,INS +
+//!   b_est - r_GNSS ~ dr + db + ... and R = (1 - rho) std². sigma_b² = rho std² follows the
 //!   fix's reported std (a better solution type bounds the correlated error anew).
 //! - Robust innovation scale (`InnovationScale`): the median of NIS / dof over recent
 //!   fixes against the chi-square median, at least 1; the tests divide the NIS by it

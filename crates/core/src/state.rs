@@ -48,6 +48,11 @@ pub enum Block {
 }
 
 impl Block {
+    /// Whether the block has no states (none has).
+    pub fn is_empty(self) -> bool {
+        self.len() == 0
+    }
+
     pub fn len(self) -> usize {
         match self {
             Block::TimeOffset

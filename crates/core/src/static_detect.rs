@@ -353,6 +353,7 @@ impl<T: Copy> Window<T> {
     }
 
     /// Oldest and newest entry.
+    #[allow(clippy::type_complexity)]
     pub fn ends(&self) -> Option<(&(f64, T), &(f64, T))> {
         Some((self.items.front()?, self.items.back()?))
     }
@@ -441,7 +442,7 @@ mod tests {
         }));
         assert!(bump.is_static, "{bump:?}");
         let drive = still(&make(
-            &|t| g + Vector3::new(0.3 * (t - 5.0).max(0.0).min(1.0), 0.0, 0.0),
+            &|t| g + Vector3::new(0.3 * (t - 5.0).clamp(0.0, 1.0), 0.0, 0.0),
             &|_| Vector3::zeros(),
             &|_| 1.0,
         ));

@@ -45,7 +45,7 @@ const MIN_PAIR_S: f64 = 0.9;
 const GRID_STEP_S: f64 = 0.01;
 
 /// The IMU's integrated rotation about the local down axis, Psi(t) \[rad\], at the ends
-/// of blocks of about [`BLOCK_S`] (IMU time scale).
+/// of blocks of about `BLOCK_S` (IMU time scale).
 #[derive(Clone, Debug, Default)]
 pub struct VerticalRotation {
     t: Vec<f64>,
@@ -99,7 +99,7 @@ impl ImuBlocks {
     }
 
     /// Psi at the block ends: each block's rotation projected on minus the unit mean
-    /// specific force of the blocks within +-[`UP_WINDOW_S`] (prefix sums).
+    /// specific force of the blocks within +-`UP_WINDOW_S` (prefix sums).
     pub fn finish(mut self) -> VerticalRotation {
         if let Some(b) = self.open.take() {
             self.close(b);

@@ -267,8 +267,8 @@ mod tests {
 /// seamlessly from one record to the next: toe' = toc' = toe + dt, M0' = M0 + n dt
 /// with n = sqrt(mu / A^3) + Delta n, i0' = i0 + IDOT dt, Omega0' = Omega0 +
 /// Omega_dot dt (Omega_k = Omega0 + Omega_dot t_k - Omega_e t, Table 20-IV; minus
-/// Omega_e 604800 s per week rolled over), af0' = af0 + af1 dt + af2 dt^2, af1' = af1
-/// + 2 af2 dt, IODE and IODC + 1 per issue (mod 256 / 1024). The input records come
+/// Omega_e 604800 s per week rolled over), af0' = af0 + af1 dt + af2 dt^2,
+/// af1' = af1 + 2 af2 dt, IODE and IODC + 1 per issue (mod 256 / 1024). The input records come
 /// first, then the copies in time order.
 pub fn reissued(
     ephs: &[GpsEphemeris],
@@ -381,13 +381,13 @@ fn mean_motion(o: &KeplerOrbit, k: &KeplerConstants) -> f64 {
 const EARTH_RE_M: f64 = 6_378_137.0;
 const EARTH_J2: f64 = 1.082_63e-3;
 
-/// Galileo nominal semi-major axis [m] (29 600 km; OS SDD §2.1, Walker 24/3/1).
+/// Galileo nominal semi-major axis \[m\] (29 600 km; OS SDD §2.1, Walker 24/3/1).
 pub const GALILEO_NOMINAL_A_M: f64 = 29_600.318e3;
 /// Galileo nominal inclination \[deg\].
 pub const GALILEO_NOMINAL_INCLINATION_DEG: f64 = 56.0;
-/// BeiDou-3 MEO nominal semi-major axis [m] (27 906 km, Walker 24/3/1, i = 55 deg).
+/// BeiDou-3 MEO nominal semi-major axis \[m\] (27 906 km, Walker 24/3/1, i = 55 deg).
 pub const BEIDOU_MEO_A_M: f64 = 27_906.1e3;
-/// BeiDou IGSO / GEO semi-major axis [m] (geosynchronous, 42 164 km).
+/// BeiDou IGSO / GEO semi-major axis \[m\] (geosynchronous, 42 164 km).
 pub const BEIDOU_IGSO_A_M: f64 = 42_164.17e3;
 /// BeiDou MEO and IGSO inclination \[deg\].
 pub const BEIDOU_INCLINATION_DEG: f64 = 55.0;
@@ -451,7 +451,7 @@ pub const GALILEO_INAV_DATA_SOURCES: u32 = 0b10_0000_0101;
 /// The bundled Galileo constellation: Walker 24/3/1 (a = 29 600 km, i = 56 deg; Galileo
 /// OS SDD §2.1), E01-E24 plane by plane, circular, as I/NAV records at `toe` (GST =
 /// GPST): IODnav 1, healthy, SISA 3.12 m, af0/af1 and BGD(E1,E5b) (within +-2 ns;
-/// BGD(E1,E5a) 0.2 ns more) from [`synthetic_clock`]. Omega0 is the plane's RAAN
+/// BGD(E1,E5a) 0.2 ns more) from `synthetic_clock`. Omega0 is the plane's RAAN
 /// (longitude of the node at the week start, as [`nominal_gps24`]).
 pub fn nominal_galileo24(toe: GpsTime) -> Vec<GalileoEphemeris> {
     let mu = GALILEO_CONSTANTS.mu_m3_per_s2;
@@ -493,7 +493,7 @@ pub fn nominal_galileo24(toe: GpsTime) -> Vec<GalileoEphemeris> {
 /// i = 55 deg, C46-C48) on one figure-of-eight ground track crossing the equator
 /// northwards at 118 deg E: planes 120 deg apart, mean anomalies -120 deg apart. All
 /// circular, D1 records with AODE = AODC = 1, healthy, URA 2 m; af0/af1 and TGD1 (within
-/// +-6 ns; TGD2 = TGD1 / 2) from [`synthetic_clock`]. No GEO (C01-C05 use the GEO
+/// +-6 ns; TGD2 = TGD1 / 2) from `synthetic_clock`. No GEO (C01-C05 use the GEO
 /// rotation; none bundled).
 pub fn nominal_beidou27(toe_bdt: GpsTime) -> Vec<BeiDouEphemeris> {
     let k = &BEIDOU_CONSTANTS;
@@ -672,7 +672,7 @@ pub fn reissued_beidou(
     reissue_records(ephs, from, until, step_s, max_age, &BEIDOU_CONSTANTS)
 }
 
-/// GLONASS nominal semi-major axis [m] (19 100 km altitude, period 11 h 15 min 44 s;
+/// GLONASS nominal semi-major axis \[m\] (19 100 km altitude, period 11 h 15 min 44 s;
 /// ICD 5.1 §3.1.1) and inclination \[deg\].
 pub const GLONASS_A_M: f64 = 25_508.2e3;
 pub const GLONASS_INCLINATION_DEG: f64 = 64.8;
@@ -693,7 +693,7 @@ pub const GLONASS_TB_STEP_S: f64 = 1_800.0;
 /// the previous record integrated by the broadcast model (`GlonassEphemeris::sat_state`:
 /// central field + J2) to its tb, so consecutive records continue one orbit; the
 /// luni-solar accelerations are 0. Clock: -tau_n = af0 and gamma_n = af1 of
-/// [`synthetic_clock`], tau_n carried on from record to record; healthy, age 0.
+/// `synthetic_clock`, tau_n carried on from record to record; healthy, age 0.
 pub fn glonass_records(from: GpsTime, until: GpsTime, leap_s: f64) -> Vec<GlonassEphemeris> {
     let k = &GALILEO_CONSTANTS; // PZ-90.11 GM = 3.986004418e14 as Galileo's
                                 // First tb: the hh:15 / hh:45 UTC at or before `from` minus 15 min.

@@ -211,7 +211,7 @@ mod tests {
         let mut k = 0.0;
         while k < 2.0 * 86_400.0 {
             let t = reference.add_s(k);
-            let edge = k < 4_500.0 || k > 2.0 * 86_400.0 - 4_500.0;
+            let edge = !(4_500.0..=2.0 * 86_400.0 - 4_500.0).contains(&k);
             for e in &ephs {
                 let truth = e.sat_state(t);
                 let s = p.state(SatId::gps(e.prn), t).unwrap();

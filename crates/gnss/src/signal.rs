@@ -22,7 +22,7 @@ impl ObsCode {
         }
     }
 
-    /// Type letter: C code [m], L phase [cycles], D Doppler [Hz], S signal strength.
+    /// Type letter: C code \[m\], L phase \[cycles\], D Doppler \[Hz\], S signal strength.
     pub fn kind(self) -> u8 {
         self.0[0]
     }

@@ -188,7 +188,7 @@ pub(crate) const SCALE_MAX_SI: f64 = 1e150;
 /// finite and non-zero (so variances neither underflow to 0 nor overflow to inf):
 /// SI value in [1e-150, 1e150]. Returns `si` or the message.
 pub fn check_scale(what: &str, value: f64, si: f64) -> Result<f64, String> {
-    if !(value > 0.0) {
+    if value.is_nan() || value <= 0.0 {
         return Err(format!("{what} must be > 0, found {value}"));
     }
     if !(SCALE_MIN_SI..=SCALE_MAX_SI).contains(&si) {

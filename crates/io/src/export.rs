@@ -317,7 +317,7 @@ fn nmea_angle(deg: f64, lon: bool) -> (String, char) {
 }
 
 /// NMEA 0183: GGA (fix quality 1; 6 = dead reckoning while the integrity monitor
-/// holds GNSS out), RMC, HDT per epoch (one per [`MAP_PERIOD_S`], see [`Every`]), UTC from
+/// holds GNSS out), RMC, HDT per epoch (one per [`MAP_PERIOD_S`], see `Every`), UTC from
 /// GPS time with the leap seconds of the epoch's week. The GGA altitude field holds
 /// the ellipsoidal height with a geoid separation of 0 (no geoid model here).
 pub struct NmeaWriter {

@@ -659,7 +659,7 @@ mod tests {
             // Magnitudes from 1e-12 to 1e8, both signs, and some exact ties.
             let m = (x >> 11) as f64 / (1u64 << 53) as f64;
             let v = match k % 4 {
-                0 => (m - 0.5) * 10f64.powi((k % 21) as i32 - 12),
+                0 => (m - 0.5) * 10f64.powi((k % 21) - 12),
                 1 => ((x % 2_000_001) as f64 - 1e6) * 0.5e-9,
                 2 => m * 7e5,
                 _ => -m * 3e7,

@@ -51,7 +51,7 @@ mod tests {
         SolutionRecord {
             gps_week: 2381 + k / 3,
             nav: NavState {
-                t: 345_600.123_456_789_123 + 0.1 * x,
+                t: 345_600.123_456_789_1 + 0.1 * x,
                 lla: Vector3::new(
                     (21.028_512_345_678_9 + 1e-7 * x).to_radians(),
                     (-105.854_212_345_678 - 3e-7 * x).to_radians(),

@@ -63,7 +63,7 @@ pub struct OtherIono {
     pub qzss_klobuchar: Option<([f64; 4], [f64; 4])>,
     /// BeiDou alpha, beta (SIS ICD B1I 3.0 §5.3.3.3).
     pub beidou_klobuchar: Option<([f64; 4], [f64; 4])>,
-    /// Galileo a_i0 [sfu], a_i1 [sfu/deg], a_i2 [sfu/deg^2] (OS SIS ICD 2.1 §5.1.6).
+    /// Galileo a_i0 \[sfu\], a_i1 [sfu/deg], a_i2 [sfu/deg^2] (OS SIS ICD 2.1 §5.1.6).
     pub galileo_nequick: Option<[f64; 3]>,
 }
 

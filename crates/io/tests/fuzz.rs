@@ -165,7 +165,7 @@ fn imu_files_seed_reads() {
     let p = dir.join("seed.bin");
     std::fs::write(&p, &t.seeds[0]).unwrap();
     let r = navfuse_io::imu::open_imu(&imu_files_source(&p).unwrap()).unwrap();
-    let n = r.map(|s| s.unwrap()).count();
+    let n = r.collect::<Result<Vec<_>, _>>().unwrap().len();
     assert_eq!(n, 3);
     let _ = std::fs::remove_dir_all(&dir);
 }

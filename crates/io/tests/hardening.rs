@@ -107,7 +107,8 @@ fn cut_last_line_is_a_warning_mid_file_damage_an_error() {
         b"1.00 0 0 0 0 0 0.1\n1.01 0 0 0 0 0 0.1\n1.02 0 0 0 0",
     );
     let mut r = open_imu(&kf_imu(&p, GapPolicy::default())).unwrap();
-    assert_eq!(r.by_ref().map(|s| s.unwrap()).count(), 2);
+    let read: Vec<_> = r.by_ref().collect::<Result<_, _>>().unwrap();
+    assert_eq!(read.len(), 2);
     let w = &r.report().warnings;
     assert!(
         w.len() == 1 && w[0].contains("imu_cut.txt:3: damaged last line"),
@@ -268,7 +269,7 @@ fn heading_and_odometer_cut_last_line() {
     };
     let whole = OdometerSource {
         path: write("whole_odometer.txt", b"10.0 1.5\n10.1 1.6\n"),
-        format: src.format.clone(),
+        format: src.format,
         skip_lines: None,
     };
     let mut w = Vec::new();

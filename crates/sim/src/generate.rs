@@ -210,6 +210,7 @@ fn sat_signals(s: &SatEpoch) -> SatSignals {
 }
 
 /// The GPS constellation and Klobuchar coefficients a scenario asks for.
+#[allow(clippy::type_complexity)]
 fn gps_constellation(
     sc: &Scenario,
 ) -> Result<(Vec<GpsEphemeris>, Option<([f64; 4], [f64; 4])>), InputError> {
@@ -502,7 +503,7 @@ pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError>
     loop {
         // GNSS at the current sample time.
         if let Some(sim) = gnss.as_mut() {
-            if k % gnss_every == 0 {
+            if k.is_multiple_of(gnss_every) {
                 let ep = sim.epoch(&cur);
                 summary.gnss_epochs += 1;
                 if !ep.outage {
@@ -665,7 +666,7 @@ pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError>
         imu_out.put(&line)?;
         summary.imu_samples += 1;
         cur = next;
-        if k % sc.truth_every == 0 {
+        if k.is_multiple_of(sc.truth_every) {
             write_truth(
                 &cur,
                 &imu_model.current_errors().to_core(),
@@ -676,14 +677,14 @@ pub fn generate(sc: &Scenario, out_dir: &Path) -> Result<SimSummary, InputError>
             summary.truth_epochs += 1;
         }
         if let Some((sim, every, o, tr)) = baro.as_mut() {
-            if k % *every == 0 {
+            if k.is_multiple_of(*every) {
                 let r = sim.sample(cur.t, cur.lla.z);
                 o.put(format!("{:.9} {:.4}\n", r.t_tag + imu_clock_s, r.pressure_pa).as_bytes())?;
                 tr.put(format!("{:.9} {:.6}\n", cur.t, r.bias_m).as_bytes())?;
             }
         }
         if let (Some(o), Some(every), Some(spec)) = (odo_out.as_mut(), odo_every, odo.as_ref()) {
-            if k % every == 0 {
+            if k.is_multiple_of(every) {
                 // SYSTEM.md §4b: true distance = (1 + dk) K_OD N.
                 let per_pulse = spec.meters_per_pulse * (1.0 + spec.scale_error_ppm * 1e-6);
                 let pulses = (distance / per_pulse).floor() as i64;

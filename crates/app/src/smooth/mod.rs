@@ -73,7 +73,7 @@ impl SmootherReport {
         sink.smoothed(out)?;
         self.epochs += 1;
         if let Some(b) = bar {
-            if self.epochs % 8192 == 0 {
+            if self.epochs.is_multiple_of(8192) {
                 b.set_position(self.epochs);
             }
         }
@@ -481,7 +481,7 @@ impl ForwardLog {
             smoothed.push(&self.enc.0).map_err(io_err("smoothed"))?;
             k += 1;
             if let Some(b) = &b {
-                if k % 1024 == 0 {
+                if k.is_multiple_of(1024) {
                     b.set_position(k);
                 }
             }

@@ -85,7 +85,7 @@ pub struct Iteration {
 /// The fix-error model chosen, with the candidates' likelihoods.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FixErrorChoice {
-    /// (correlation time [s] or 0 for white, correlated fraction, position std
+    /// (correlation time \[s\] or 0 for white, correlated fraction, position std
     /// scale, log-likelihood).
     pub candidates: Vec<(f64, f64, f64, f64)>,
     pub corr_time_s: f64,

@@ -8,7 +8,7 @@
 //!
 //! Nothing of the measurement enters H, R or the calibration decision: with the older
 //! form y = v^m_x - (1 + k) s_od (H_k = -s_od) the speed noise sat in H and the
-//! speed-dependent std, and biased k low (errors in variables, REFERENCES [FUL87]), the
+//! speed-dependent std, and biased k low (errors in variables, REFERENCES \[FUL87\]), the
 //! more so the more records (0.1 m/s of noise at 100 Hz: -891 ppm, -8.2 sigma).
 //!
 //! With `nhc_std`, the lateral and vertical rows (v^m = \[v 0 0\]^T, seed 004's

@@ -540,7 +540,7 @@ impl Fuser<'_> {
     ///
     /// Bookkeeping per scalar row, under its name: an innovations.csv row with its
     /// innovation given the rows before it, e_i, and its share of the NIS, e_i^2 / s_i
-    /// (the sequential decomposition, [`crate::filter::RowTerms`]: the same in both
+    /// (the sequential decomposition, `crate::filter::RowTerms`: the same in both
     /// modes, and the shares sum to the joint NIS), `aiding_used` / `aiding_rejected`
     /// and the NIS statistics per row. Returns the correction fed back (Applied when
     /// any row was applied).
@@ -749,7 +749,7 @@ pub enum EpochUpdate {
     /// One stacked update, gated jointly (`gate` on the joint NIS, as many degrees of
     /// freedom as rows; a rejection is an [`Event::Rejected`] under the first name).
     OneShot { gate: Option<f64> },
-    /// Row by row ([`crate::filter::Eskf::update_sequential`]): each row's prediction
+    /// Row by row (`crate::filter::Eskf::update_sequential`): each row's prediction
     /// includes the corrections of the rows before it (innovation y_i - H_i dx), each
     /// row gated alone (`row_gate`, 1 dof), one feedback at the end. Ungated, the same
     /// state as `OneShot`. Needs uncorrelated rows (diagonal R); correlated ones are

@@ -179,7 +179,7 @@ impl TightGnss {
             // coupling, with the fix's own covariance (the joint pseudorange NIS is
             // inflated by per-satellite biases the filter does not model). With 1-3
             // satellites, no fix: all pseudoranges jointly (chi-square only).
-            let fix_pos = epoch.fix.as_ref().map(|f| Aiding::GnssPosition(f));
+            let fix_pos = epoch.fix.as_ref().map(Aiding::GnssPosition);
             let prs: Vec<Aiding> = match epoch.fix.as_ref() {
                 Some(f) if f.vel_ned.is_some() => {
                     vec![Aiding::GnssPosition(f), Aiding::GnssVelocity(f)]

@@ -53,6 +53,6 @@ mod tests {
     #[test]
     fn jacobian_matches_finite_differences() {
         let fx = context_fixture(true);
-        numeric_jacobian_check(&fx, |ctx| vehicle_velocity(ctx), 1e-6);
+        numeric_jacobian_check(&fx, vehicle_velocity, 1e-6);
     }
 }

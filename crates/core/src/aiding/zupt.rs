@@ -97,13 +97,12 @@ impl AidingSource for Zupt {
         self.odo_speeds.set_direction(f.direction());
         match m {
             Measurement::Odometer(o) => self.odo_speeds.push(f.nav().t, o.speed_mps),
-            Measurement::Gnss(fix) => {
+            Measurement::Gnss(fix)
                 if fix
                     .vel_ned
-                    .is_some_and(|v| v.norm() > self.opt.max_speed_mps)
-                {
-                    self.gnss_moving_t = Some(fix.t);
-                }
+                    .is_some_and(|v| v.norm() > self.opt.max_speed_mps) =>
+            {
+                self.gnss_moving_t = Some(fix.t);
             }
             _ => {}
         }

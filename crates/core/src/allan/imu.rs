@@ -140,7 +140,7 @@ pub struct ImuAllan {
 }
 
 impl ImuAllan {
-    /// From the increments of each channel (gyro x y z [rad], accel x y z [m/s]),
+    /// From the increments of each channel (gyro x y z \[rad\], accel x y z [m/s]),
     /// one every `dt_s` seconds. The mean increment is removed before integration
     /// (it does not change the Allan variance, and keeps the integral small: gravity
     /// on a vertical accelerometer).

@@ -135,7 +135,7 @@ pub fn run_backward<E: From<NavError>>(
             n.summary_mut().outputs += 1;
             on_output(&n)?;
         }
-        if n.summary().imu_samples % 8192 == 0 {
+        if n.summary().imu_samples.is_multiple_of(8192) {
             on_progress(s.t);
         }
         t_prev = t_out;

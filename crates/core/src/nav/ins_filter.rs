@@ -392,9 +392,9 @@ impl InsFilter {
                 // First-order Gauss-Markov (fix_error.rs): F = -1/tau, Qc = 2 sigma²/tau;
                 // the nominal value decays with it.
                 let (i, tau) = (sb.index, *corr_time_s);
-                for k in 0..sb.block.len() {
+                for (k, s) in sigma.iter().enumerate().take(sb.block.len()) {
                     self.disc.f[(i + k, i + k)] = -1.0 / tau;
-                    self.disc.qc[(i + k, i + k)] = 2.0 * sigma[k].powi(2) / tau;
+                    self.disc.qc[(i + k, i + k)] = 2.0 * s.powi(2) / tau;
                 }
                 let e = (-a.dt.abs() / tau).exp();
                 for k in 0..sb.block.len() {
@@ -413,9 +413,9 @@ impl InsFilter {
                 // take Phi below zero).
                 let (i, tau) = (sb.index, *corr_time_s);
                 let e = (-a.dt.abs() / tau).exp();
-                for k in 0..sb.block.len() {
+                for (k, s) in sigma.iter().enumerate().take(sb.block.len()) {
                     self.disc.phi[(i + k, i + k)] = e;
-                    self.disc.qd[(i + k, i + k)] = sigma[k].powi(2) * (1.0 - e * e);
+                    self.disc.qd[(i + k, i + k)] = s.powi(2) * (1.0 - e * e);
                 }
             }
         }

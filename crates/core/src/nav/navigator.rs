@@ -448,7 +448,7 @@ impl Navigator {
         self.summary.imu_samples += 1;
         self.summary.last_t = t;
         if !self.ins.nav_is_finite()
-            || (self.summary.imu_samples % 256 == 0 && !self.ins.covariance_is_finite())
+            || (self.summary.imu_samples.is_multiple_of(256) && !self.ins.covariance_is_finite())
         {
             return Err(NavError(format!(
                 "the navigation state stopped being finite at t = {t:.3} (check the IMU units and axes, the initial attitude and the noise settings); the output before this epoch was written"

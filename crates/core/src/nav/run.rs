@@ -76,6 +76,7 @@ pub struct RunHooks<'a, E> {
     /// record by [`Navigator::smoother_record_index`].
     pub on_record: Option<&'a mut dyn FnMut(RtsRecord) -> Result<(), E>>,
     /// Every update tried ([`InnovationRow`]), after each IMU step.
+    #[allow(clippy::type_complexity)]
     pub on_innovations: Option<&'a mut dyn FnMut(&[InnovationRow]) -> Result<(), E>>,
     /// With `on_record`: every update applied, as noise identification needs it
     /// ([`FusedUpdate`]), after each IMU step.
@@ -252,7 +253,7 @@ fn drive<E: From<NavError>>(
             n.summary_mut().outputs += 1;
             on_output(&n)?;
         }
-        if n.summary().imu_samples % 8192 == 0 {
+        if n.summary().imu_samples.is_multiple_of(8192) {
             on_progress(s.t);
         }
         t_prev = t_out;

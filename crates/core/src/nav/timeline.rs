@@ -436,7 +436,7 @@ impl<'a> ReverseInbox<'a> {
     }
 
     /// The mirror of [`Inbox::next_due_in`]: the next (latest remaining) measurement
-    /// due in [t_low, t_high), snapped by [`snapped_down`], at or after t_low.
+    /// due in [t_low, t_high), snapped by `snapped_down`, at or after t_low.
     pub fn next_due_in(&mut self, t_low: f64, t_high: f64, time_offset_s: f64) -> Option<Due<'a>> {
         let (c, i, t_eff) = self.last(time_offset_s, t_low, t_high)?;
         if t_eff < t_low {

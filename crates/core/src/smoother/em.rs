@@ -16,7 +16,7 @@
 //! per transition k -> k+1 of the process model alone (`RtsRecord::propagated_only`)
 //! the expected square of the process noise w = x_{k+1}^- - Phi x_k^+ per state i:
 //!
-//!   E[w_i²] = m_i² + P_{k+1|N,ii} - 2 (P_{k+1|N} (Phi C_k)^T)_ii + (Phi P_k|N Phi^T)_ii,
+//!   E\[w_i²\] = m_i² + P_{k+1|N,ii} - 2 (P_{k+1|N} (Phi C_k)^T)_ii + (Phi P_k|N Phi^T)_ii,
 //!   m = s_{k+1}^- - Phi s_k^+,   P_{k+1,k|N} = P_{k+1|N} C_k^T
 //!
 //! whose ratio to Q_ii is the M-step of a scale on that state's process noise.

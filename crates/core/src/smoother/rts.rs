@@ -138,6 +138,7 @@ impl Gain {
 pub struct GainMaker {
     /// The later record's Phi - I (empty: identity), Q, and whether its transition
     /// is the process model alone.
+    #[allow(clippy::type_complexity)]
     later: Option<(Vec<(usize, usize, f64)>, Option<DMatrix<f64>>, bool)>,
     /// Records where P^- had to be inverted by eigen-decomposition (not positive
     /// definite in floating point).

@@ -68,7 +68,7 @@ impl CaseRow {
     }
 }
 
-/// What a batch gave: the rows in manifest order, each case's wall time [s] and the
+/// What a batch gave: the rows in manifest order, each case's wall time \[s\] and the
 /// whole batch's.
 #[derive(Clone, Debug)]
 pub struct BatchResult {

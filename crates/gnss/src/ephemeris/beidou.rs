@@ -9,7 +9,7 @@ use crate::time::{wrap_half_week, GpsTime};
 
 /// GPS week of BDT week 0 (2006-01-01 00:00:00 UTC; ICD B1I 3.0 §4.2).
 pub const BDT_WEEK0_IN_GPS_WEEKS: i32 = 1356;
-/// BDT - GPST [s] (the 14 leap seconds between 1980 and 2006).
+/// BDT - GPST \[s\] (the 14 leap seconds between 1980 and 2006).
 pub const BDT_MINUS_GPST_S: f64 = -14.0;
 
 /// GPST to BDT (week, seconds of week).

@@ -42,7 +42,7 @@ pub struct GalileoEphemeris {
     pub data_sources: u32,
     /// Signal-in-space accuracy SISA \[m\] (RINEX gives metres; -1 / 0 = unknown, NAPA).
     pub sisa_m: f64,
-    /// RINEX "SV health" bits (see [`HEALTH_INAV_MASK`]).
+    /// RINEX "SV health" bits (see `HEALTH_INAV_MASK`).
     pub health: u32,
     /// BGD(E1,E5a) \[s\].
     pub bgd_e1_e5a_s: f64,

@@ -94,7 +94,7 @@ fn rk4(x: &[f64; 6], h: f64, acc: &Vector3<f64>) -> [f64; 6] {
 }
 
 impl GlonassEphemeris {
-    /// L1 carrier frequency [Hz] (ICD §3.3.1.4: 1602 MHz + k 562.5 kHz).
+    /// L1 carrier frequency \[Hz\] (ICD §3.3.1.4: 1602 MHz + k 562.5 kHz).
     pub fn l1_frequency_hz(&self) -> f64 {
         1_602.0e6 + f64::from(self.freq_channel) * 562.5e3
     }

@@ -65,7 +65,7 @@ pub struct KeplerOrbit {
     pub crs_m: f64,
     pub cic_rad: f64,
     pub cis_rad: f64,
-    /// toe, seconds of the system's week [s] (enters Omega_k as -Omega_e toe).
+    /// toe, seconds of the system's week \[s\] (enters Omega_k as -Omega_e toe).
     pub toe_sow_s: f64,
 }
 

@@ -379,7 +379,7 @@ pub(super) fn convert(
         },
         scale_window: match g.scale_window {
             None => fd.scale_window,
-            Some(w) if w >= 0.0 && w <= 1e6 && w.fract() == 0.0 => w as usize,
+            Some(w) if (0.0..=1e6).contains(&w) && w.fract() == 0.0 => w as usize,
             Some(w) => {
                 return Err(kerr(
                     "gnss.scale_window",

@@ -226,6 +226,7 @@ pub fn parse_toml_str(text: &str, path: &Path) -> Result<RunConfig, ConfigError>
 /// format = ...)`), the GNSS one with its options (systems, signals). Keys as in
 /// [`load_toml`]; other sections are errors. `path` names
 /// the text in errors and relative paths resolve against its directory.
+#[allow(clippy::type_complexity)]
 pub fn parse_input_sections(
     text: &str,
     path: &Path,

@@ -244,6 +244,7 @@ pub(super) struct TomlInputs {
 }
 
 /// [`TomlInputs`] -> the sources; relative paths resolve against `base`.
+#[allow(clippy::type_complexity)]
 pub(super) fn convert_inputs(
     raw: &TomlInputs,
     base: &Path,

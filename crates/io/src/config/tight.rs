@@ -55,7 +55,7 @@ pub(super) fn convert(x: &TTight, t: &mut TightOptions) -> KResult<()> {
     t.use_pseudorange = x.use_pseudorange.unwrap_or(d.use_pseudorange);
     t.gate_probability = match x.gate_probability {
         None => d.gate_probability,
-        Some(p) if p == 0.0 => None,
+        Some(0.0) => None,
         Some(p) if p > 0.0 && p < 1.0 => Some(p),
         Some(p) => {
             return Err(kerr(

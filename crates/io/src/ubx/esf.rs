@@ -93,7 +93,7 @@ pub struct TimeMap {
     pub t0_s: f64,
     pub tick_s: f64,
     /// Anchors used (after outlier rejection), the RMS of their offsets about the
-    /// median and the spread (largest - smallest) [s].
+    /// median and the spread (largest - smallest) \[s\].
     pub anchors: usize,
     pub rejected: usize,
     pub rms_s: f64,

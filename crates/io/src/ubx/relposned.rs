@@ -4,7 +4,7 @@
 //!
 //! Layouts (u-blox interface descriptions):
 //! - version 0 (u-blox M8, 40 bytes): version, reserved, refStationId u16, iTOW u32
-//!   [ms], relPosN/E/D i32 [cm] (8, 12, 16), relPosHPN/E/D i8 [0.1 mm] (20-22), accN/E/D
+//!   \[ms\], relPosN/E/D i32 \[cm\] (8, 12, 16), relPosHPN/E/D i8 [0.1 mm] (20-22), accN/E/D
 //!   u32 [0.1 mm] (24, 28, 32), flags u32 (36). No heading field: the heading is
 //!   atan2(E, N) of the vector, its std (N^2 accE^2 + E^2 accN^2)^(1/2) / (N^2 + E^2).
 //! - version 1 (u-blox F9, 64 bytes): ..., relPosN/E/D (8, 12, 16), relPosLength
@@ -18,13 +18,13 @@ use super::frame::{u32_at, Frame};
 /// What one NAV-RELPOSNED gave.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RelPosHeading {
-    /// GPS time of week [s] (iTOW).
+    /// GPS time of week \[s\] (iTOW).
     pub itow_s: f64,
     /// Byte offset of the message.
     pub offset: usize,
-    /// Baseline heading [rad], [0, 2 pi).
+    /// Baseline heading \[rad\], [0, 2 pi).
     pub heading_rad: f64,
-    /// Its 1-sigma [rad] (accHeading, or propagated from accN / accE for version 0).
+    /// Its 1-sigma \[rad\] (accHeading, or propagated from accN / accE for version 0).
     pub std_rad: f64,
     /// carrSoln: 0 none, 1 float, 2 fixed.
     pub carr_soln: u8,

@@ -171,8 +171,8 @@ pub fn relposned_v1(itow_ms: u32, heading_deg: f64, acc_deg: f64, flags: u32) ->
     frame(0x01, 0x3C, &p)
 }
 
-/// NAV-RELPOSNED version 0 (no heading field): relative position N, E, D [m]
-/// (cm + 0.1 mm parts) with accuracies N, E [m], `flags`.
+/// NAV-RELPOSNED version 0 (no heading field): relative position N, E, D \[m\]
+/// (cm + 0.1 mm parts) with accuracies N, E \[m\], `flags`.
 pub fn relposned_v0(itow_ms: u32, ned_m: [f64; 3], acc_ne_m: [f64; 2], flags: u32) -> Vec<u8> {
     let mut p = vec![0u8; 40];
     p[4..8].copy_from_slice(&itow_ms.to_le_bytes());

@@ -6,13 +6,13 @@
 //!   body frame FRD; without it, `sensor_gyro` + `sensor_accel` joined on the gyro
 //!   sample times ([`separate_imu`]);
 //! - GNSS: `vehicle_gps_position` (else `sensor_gps`): `lat`/`lon` [1e-7 deg] and
-//!   `alt_ellipsoid` [mm] or `latitude_deg`/`longitude_deg`/`altitude_ellipsoid_m`
-//!   (newer PX4), `eph`/`epv` [m] as position sigmas, `vel_n_m_s`.. with
+//!   `alt_ellipsoid` \[mm\] or `latitude_deg`/`longitude_deg`/`altitude_ellipsoid_m`
+//!   (newer PX4), `eph`/`epv` \[m\] as position sigmas, `vel_n_m_s`.. with
 //!   `s_variance_m_s` as velocity sigma (when `vel_ned_valid`), `fix_type` 3-6 kept;
 //! - barometer: `sensor_baro.pressure` [Pa; hPa in PX4 before v1.11, told by its
 //!   range], or `vehicle_air_data.baro_pressure_pa` when that has more records;
-//! - EKF2's estimate: `vehicle_global_position` (`lat`, `lon` [deg], `alt_ellipsoid`
-//!   or else `alt` [m]), `vehicle_attitude.q` (Hamilton, w x y z, body FRD to NED:
+//! - EKF2's estimate: `vehicle_global_position` (`lat`, `lon` \[deg\], `alt_ellipsoid`
+//!   or else `alt` \[m\]), `vehicle_attitude.q` (Hamilton, w x y z, body FRD to NED:
 //!   navfuse's q_bn) and `vehicle_local_position` `vx vy vz` (NED), nearest record.
 //!
 //! Time: ULog timestamps count microseconds since boot. When the log has GPS messages
@@ -60,14 +60,14 @@ pub fn is_ulog(path: &Path) -> bool {
         .is_ok_and(|_| b == MAGIC)
 }
 
-/// Boot time [µs] -> navfuse time [s].
+/// Boot time \[µs\] -> navfuse time \[s\].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TimeMap {
     /// GPS week of the times; None: seconds since boot.
     pub week: Option<u32>,
     /// GPS time [µs since the GPS epoch] - boot time [µs], when known.
     offset_us: Option<i128>,
-    /// The GPS records' latency [µs]: `timestamp` (publication) minus the fix's
+    /// The GPS records' latency \[µs\]: `timestamp` (publication) minus the fix's
     /// time of validity, from the log's `EKF2_GPS_DELAY` parameter (0 without it).
     pub gps_delay_us: i128,
 }
@@ -76,7 +76,7 @@ impl TimeMap {
     /// The mapping of a log, one for all its topics: through the first GPS topic and
     /// instance (0 first) with `time_utc_usec`. `time_utc_usec - timestamp` is the
     /// GPS - boot offset less the GPS latency (a record is published after its fix),
-    /// so the latency `EKF2_GPS_DELAY` [ms] (what PX4's own filter assumes) is added
+    /// so the latency `EKF2_GPS_DELAY` \[ms\] (what PX4's own filter assumes) is added
     /// back: IMU and barometer samples get their true time, and a fix its time of
     /// validity ([`TimeMap::fix_t`]).
     pub fn of(u: &Ulog) -> TimeMap {
@@ -134,12 +134,12 @@ impl TimeMap {
         }
     }
 
-    /// Time of validity [s] of a GPS record published at boot timestamp `us`.
+    /// Time of validity \[s\] of a GPS record published at boot timestamp `us`.
     pub fn fix_t(&self, us: u64) -> f64 {
         self.t(us) - self.gps_delay_us as f64 * 1e-6
     }
 
-    /// Time [s] of boot timestamp `us`.
+    /// Time \[s\] of boot timestamp `us`.
     pub fn t(&self, us: u64) -> f64 {
         match self.offset_us {
             Some(o) => (us as i128 + o) as f64 * 1e-6,
@@ -205,7 +205,7 @@ fn topic<'a>(path: &Path, u: &'a Ulog, name: &str, multi_id: u8) -> Result<Topic
 /// IMU samples of a log, rates in the body frame (FRD).
 #[derive(Clone, Debug)]
 pub struct UlogImu {
-    /// (t [s], gyro [rad/s], accel [m/s²]) in time order.
+    /// (t \[s\], gyro [rad/s], accel [m/s²]) in time order.
     pub samples: Vec<(f64, Vector3<f64>, Vector3<f64>)>,
     /// Records left out (no accelerometer sample, non-finite values, out of order).
     pub skipped: usize,
@@ -520,7 +520,7 @@ pub fn gnss_fixes(
     Ok((fixes, skipped))
 }
 
-/// Barometric pressures (t [s], Pa) from `sensor_baro` instance `multi_id`, else
+/// Barometric pressures (t \[s\], Pa) from `sensor_baro` instance `multi_id`, else
 /// `vehicle_air_data`; repeated timestamps dropped.
 pub fn baro_pressures(
     path: &Path,

@@ -417,11 +417,9 @@ impl Ulog {
                         u.log_messages.push((ts, s));
                     }
                 }
-                b'O' => {
-                    if p.len() >= 2 {
-                        u.dropouts.0 += 1;
-                        u.dropouts.1 += u16_at(p, 0) as u64;
-                    }
+                b'O' if p.len() >= 2 => {
+                    u.dropouts.0 += 1;
+                    u.dropouts.1 += u16_at(p, 0) as u64;
                 }
                 _ => {} // 'S' sync and unknown types.
             }

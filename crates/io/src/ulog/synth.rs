@@ -3,7 +3,7 @@
 //! instances of one topic, and the topics navfuse reads, with a static vehicle at
 //! 47.4 N 8.5 E on a known GPS time (`time_utc_usec`).
 
-/// Boot time of the first record [µs].
+/// Boot time of the first record \[µs\].
 pub const T0_US: u64 = 20_000_000;
 /// UTC of boot time 0 [µs since 1970]: 2024-03-18 00:00:00 UTC.
 pub const UTC_AT_BOOT_US: u64 = 1_710_720_000_000_000;

@@ -63,6 +63,7 @@ pub(crate) fn string_bits(words: &[u32]) -> Bits {
 pub(super) struct GloDecoder {
     /// Strings 1-4 per slot (each with the receiver time it came at) and the frame
     /// number they were received in.
+    #[allow(clippy::type_complexity)]
     strings: HashMap<u8, ([Option<(Bits, f64)>; 4], u32)>,
     pub(super) ephemerides: Vec<GlonassEphemeris>,
 }

@@ -2,12 +2,12 @@
 //! system the receiver tracks, collected per satellite into ephemerides
 //! (docs/FORMATS.md "RXM-SFRBX"):
 //!
-//! - GPS and QZSS L1 C/A LNAV subframes 1-3 ([`gps`]), subframe 4 page 18
+//! - GPS and QZSS L1 C/A LNAV subframes 1-3 (`gps`), subframe 4 page 18
 //!   (SV ID 56: Klobuchar and GPS-UTC leap seconds);
 //! - BeiDou D1 (MEO/IGSO, subframes 1-3) and D2 (GEO, subframe 1 pages 1-10)
-//!   ([`beidou`]), times BDT;
-//! - Galileo I/NAV E1-B and E5b-I word types 1-5 ([`galileo`]), CRC-24Q checked;
-//! - GLONASS L1/L2 OF strings 1-4 ([`glonass`]), Hamming checked, tb in GPST.
+//!   (`beidou`), times BDT;
+//! - Galileo I/NAV E1-B and E5b-I word types 1-5 (`galileo`), CRC-24Q checked;
+//! - GLONASS L1/L2 OF strings 1-4 (`glonass`), Hamming checked, tb in GPST.
 //!
 //! Everything else (SBAS, CNAV, B-CNAV, F/NAV, E6, almanac pages) is counted in
 //! [`SfrbxCounts::not_decoded`]. Malformed input is counted and reported, never a
