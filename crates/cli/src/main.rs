@@ -59,8 +59,11 @@ enum Command {
     /// rejected GNSS fixes and input findings; DIR/summary.json holds the run's counts and the estimated GNSS-IMU time
     /// offset. When the configuration estimates the time offset, the data are read twice:
     /// the first pass finds the offset, the second navigates with it and writes the
-    /// solution on the GNSS time scale. A progress bar is drawn on stderr when it is a
-    /// terminal; a one-line summary is printed at the end.
+    /// solution on the GNSS time scale (a search matching turns comes first, so offsets
+    /// of a second or two are found). With a `[tuning]` section the noise model is
+    /// first estimated from the data (as `navfuse tune`; tuned.toml, tuning.json and
+    /// tuning.txt are written) and the run uses it. A progress bar is drawn on stderr
+    /// when it is a terminal; a one-line summary is printed at the end.
     ///
     /// Plausibility checks (docs/FORMATS.md) warn about likely mistakes (units, axes,
     /// lever arm in cm, UTC tags, a wide time-offset prior) naming the key to change,
