@@ -151,8 +151,35 @@ fn prepare(cfg: RunConfig, opts: &RunOptions) -> Result<Prepared, Error> {
     Ok(Prepared {
         cfg: pr.cfg,
         imu,
-        measurements: pr.measurements,
+        measurements: thin_odometer(pr.measurements),
     })
+}
+
+/// Highest odometer rate the passes fuse \[Hz\].
+const TUNE_MAX_ODOMETER_HZ: f64 = 2.0;
+
+/// The odometer records at most TUNE_MAX_ODOMETER_HZ apart. Each record carries its
+/// own counting interval, so the kept ones are valid measurements; EM on a subset of
+/// the data estimates the same parameters (the M-step for R is the mean second moment
+/// of the smoothed residuals, which does not depend on how many there are), and every
+/// odometer update makes a smoother record: a 10 Hz odometer made the passes 5x
+/// dearer than the GNSS alone (16 368 records against 1489 in 25 min).
+fn thin_odometer(measurements: Vec<Measurement>) -> Vec<Measurement> {
+    let min_dt = 1.0 / TUNE_MAX_ODOMETER_HZ - 1e-6;
+    let mut last = f64::NEG_INFINITY;
+    measurements
+        .into_iter()
+        .filter(|m| match m {
+            Measurement::Odometer(o) => {
+                let keep = o.t - last >= min_dt;
+                if keep {
+                    last = o.t;
+                }
+                keep
+            }
+            _ => true,
+        })
+        .collect()
 }
 
 /// A forward run alone: its summary (innovation statistics, likelihood).
